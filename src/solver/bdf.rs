@@ -1,0 +1,902 @@
+//! The integrator: variable-order (1–5), variable-step BDF in Nordsieck form with modified
+//! Newton iteration, in the manner of CVODE.
+//!
+//! Step and order selection, Newton convergence and Jacobian/LU reuse follow the CVODE
+//! description (Hindmarsh et al., "SUNDIALS", ACM TOMS 31 (2005), §2.1, and the SUNDIALS
+//! CVODE user guide, "Mathematical considerations"); every constant below names its source.
+//! All data live on the stack: a step allocates nothing (the one exception, the stability
+//! guard's eigenvalues, runs only when J is re-evaluated).
+
+use super::coeffs::{bdf_coeffs, lower_order, raise_order, StepCoeffs, NCOL};
+use super::config::BdfConfig;
+use super::error::SolverError;
+use super::guard::StabilityGuard;
+use super::lu::Lu;
+use super::stats::Stats;
+use super::system::OdeSystem;
+use nalgebra::{SMatrix, SVector};
+
+// Step-size factors (CVODE, cvode.c): growth cap on the first step and later steps, cap after
+// two error failures, floor after an error failure, factor after a Newton failure.
+const ETA_MAX_FIRST: f64 = 1.0e4;
+const ETA_MAX: f64 = 10.0;
+const ETA_MAX_AFTER_FAILURES: f64 = 0.2;
+const ETA_MIN: f64 = 0.1;
+const ETA_NEWTON_FAIL: f64 = 0.25;
+/// A new step size is adopted only if it is at least this factor larger (CVODE's THRESH).
+const ETA_THRESHOLD: f64 = 1.5;
+/// Safety biases on the error estimates at orders q−1, q, q+1, and the small addend in
+/// η = 1/((bias·dsm)^(1/(q+1)) + ADDON) (CVODE's BIAS1, BIAS2, BIAS3, ADDON).
+const BIAS_DOWN: f64 = 6.0;
+const BIAS_SAME: f64 = 6.0;
+const BIAS_UP: f64 = 10.0;
+const ADDON: f64 = 1.0e-6;
+/// Failure limits per step (CVODE's defaults maxnef = 7, maxncf = 10), and the error-failure
+/// count after which the order drops (MXNEF1 = 3) and the growth cap applies (SMALL_NEF = 2).
+const MAX_ERROR_FAILURES: u32 = 7;
+const MAX_NEWTON_FAILURES: u32 = 10;
+const ERROR_FAILURES_ORDER_DROP: u32 = 3;
+const ERROR_FAILURES_GROWTH_CAP: u32 = 2;
+/// Steps to wait at order 1 after the order was forced down to 1 (LONG_WAIT).
+const LONG_WAIT: usize = 10;
+// Newton (CVODE cvNls): iterations per attempt, rate damping, divergence ratio, and the
+// fraction of the error budget the iteration error may take (NLS_MAXCOR, CRDOWN, RDIV,
+// nlscoef).
+const NEWTON_MAX_ITERS: usize = 3;
+const RATE_DAMPING: f64 = 0.3;
+const DIVERGENCE_RATIO: f64 = 2.0;
+const NEWTON_COEF: f64 = 0.1;
+// Jacobian and LU reuse (CVODE cvLs): refactor after MSBP steps or when γ changed by more than
+// DGMAX; re-evaluate J after MSBJ steps, or after a Newton failure when γ changed little.
+const REFACTOR_STEPS: u64 = 20;
+const REFACTOR_GAMMA_RATIO: f64 = 0.3;
+const REJAC_STEPS: u64 = 51;
+const REJAC_GAMMA_RATIO: f64 = 0.2;
+/// Floor of the finite-difference increment, in units of h·ε·N·‖f‖ (CVODE's MIN_INC_MULT).
+const FD_MIN_INC_MULT: f64 = 1000.0;
+
+/// A step that would end within this relative distance short of the stop time is stretched
+/// to land on it, rather than leave a sliver of a step (round-off in a fixed-step run).
+const LANDING_STRETCH: f64 = 1e-6;
+
+/// What one call of [`Bdf::step`] achieved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepOutcome {
+    /// One step was accepted; the stop time is still ahead.
+    Stepped,
+    /// The step landed exactly on the stop time.
+    ReachedStop,
+}
+
+/// Why the last Newton attempt failed, which decides what the next setup refreshes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ConvFail {
+    None,
+    /// The iteration failed with a stale Jacobian.
+    BadJacobian,
+    /// The last attempt failed the error test: refactor with the new γ, keep J.
+    ErrorTest,
+    /// The last attempt failed Newton for another reason: fresh J.
+    Other,
+}
+
+/// Why a Newton attempt gave up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum NewtonFail {
+    Diverged,
+    NonFinite,
+    Singular,
+}
+
+/// The integrator state: history, order, step, Newton matrix, counters. `Clone` copies all of
+/// it, so a clone continues exactly as the original would (FMU state save and restore).
+#[derive(Clone, Debug)]
+pub struct Bdf<const N: usize> {
+    cfg: BdfConfig<N>,
+    /// t_n, the time of the last accepted step.
+    t: f64,
+    /// Nordsieck array z_j = hscale^j y^(j)(t_n)/j!.
+    zn: [SVector<f64, N>; NCOL],
+    /// The step the columns of `zn` are scaled with.
+    hscale: f64,
+    /// Size of the step being attempted (after the pending change is applied).
+    h: f64,
+    /// Order of the step being attempted.
+    q: usize,
+    /// Order and step chosen for the next step, applied when it starts.
+    q_next: usize,
+    h_next: f64,
+    /// Steps to wait before an order change is considered.
+    qwait: usize,
+    /// Recent accepted step sizes, tau[1] the most recent.
+    tau: [f64; NCOL + 1],
+    coeffs: StepCoeffs,
+    /// tq[5] of the step whose correction was saved in zn[qmax].
+    saved_tq5: f64,
+    /// Size and order of the last accepted step.
+    hu: f64,
+    qu: usize,
+    /// The last accepted correction and its norm.
+    acor: SVector<f64, N>,
+    /// Error weights 1/(rtol|y| + atol).
+    ewt: SVector<f64, N>,
+    /// Cap on the next step-size ratio.
+    eta_max: f64,
+    /// Newton: Jacobian, LU of I − γ_p·J, γ = h/l_1, the γ_p of the LU, convergence rate.
+    jac: SMatrix<f64, N, N>,
+    jac_valid: bool,
+    lu: Option<Lu<N>>,
+    gamma: f64,
+    gamma_lu: f64,
+    rate: f64,
+    steps_at_lu: u64,
+    steps_at_jac: u64,
+    guard: StabilityGuard,
+    /// Whether the first step has been taken since the last (re)initialisation.
+    started: bool,
+    /// Set when the attempted step was clipped to end exactly on the stop time.
+    landing: Option<f64>,
+    stats: Stats,
+}
+
+impl<const N: usize> Bdf<N> {
+    /// A solver at `(t0, y0)`. Nothing is evaluated until the first step.
+    pub fn new(cfg: BdfConfig<N>, t0: f64, y0: SVector<f64, N>) -> Result<Self, SolverError> {
+        cfg.validate()?;
+        if !t0.is_finite() || !y0.iter().all(|v| v.is_finite()) {
+            return Err(SolverError::NonFiniteState { t: t0 });
+        }
+        let mut zn = [SVector::zeros(); NCOL];
+        zn[0] = y0;
+        Ok(Self {
+            cfg,
+            t: t0,
+            zn,
+            hscale: 0.0,
+            h: 0.0,
+            q: 1,
+            q_next: 1,
+            h_next: 0.0,
+            qwait: 2,
+            tau: [0.0; NCOL + 1],
+            coeffs: StepCoeffs::default(),
+            saved_tq5: 0.0,
+            hu: 0.0,
+            qu: 0,
+            acor: SVector::zeros(),
+            ewt: SVector::zeros(),
+            eta_max: ETA_MAX_FIRST,
+            jac: SMatrix::zeros(),
+            jac_valid: false,
+            lu: None,
+            gamma: 0.0,
+            gamma_lu: 0.0,
+            rate: 1.0,
+            steps_at_lu: 0,
+            steps_at_jac: 0,
+            guard: StabilityGuard::default(),
+            started: false,
+            landing: None,
+            stats: Stats::default(),
+        })
+    }
+
+    /// Restarts at `(t, y)` with order 1, for a discontinuity of f or of the state. Settings,
+    /// counters and the Jacobian are kept; the step history is dropped.
+    pub fn reinit(&mut self, t: f64, y: SVector<f64, N>) -> Result<(), SolverError> {
+        if !t.is_finite() || !y.iter().all(|v| v.is_finite()) {
+            return Err(SolverError::NonFiniteState { t });
+        }
+        self.t = t;
+        self.zn = [SVector::zeros(); NCOL];
+        self.zn[0] = y;
+        self.q = 1;
+        self.q_next = 1;
+        self.qwait = 2;
+        self.tau = [0.0; NCOL + 1];
+        self.saved_tq5 = 0.0;
+        self.hu = 0.0;
+        self.qu = 0;
+        self.eta_max = ETA_MAX_FIRST;
+        self.lu = None;
+        self.started = false;
+        self.landing = None;
+        Ok(())
+    }
+
+    /// Time of the last accepted step.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// State at [`t`](Self::t).
+    pub fn y(&self) -> &SVector<f64, N> {
+        &self.zn[0]
+    }
+
+    /// Work counters.
+    pub fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// Settings.
+    pub fn config(&self) -> &BdfConfig<N> {
+        &self.cfg
+    }
+
+    /// Order and size of the last accepted step (0 and 0.0 before the first).
+    pub fn last_step(&self) -> (usize, f64) {
+        (self.qu, self.hu)
+    }
+
+    /// Order and size planned for the next step.
+    pub fn next_step(&self) -> (usize, f64) {
+        (self.q_next, self.h_next)
+    }
+
+    /// The state at `t` inside the last step `[t_n − h_u, t_n]`, from the Nordsieck
+    /// polynomial (dense output, CVODE's CVodeGetDky with k = 0).
+    pub fn interpolate(&self, t: f64) -> Result<SVector<f64, N>, SolverError> {
+        let lo = self.t - self.hu;
+        let fuzz = 100.0 * f64::EPSILON * (self.t.abs() + self.hu.abs());
+        if !(t >= lo - fuzz && t <= self.t + fuzz) {
+            return Err(SolverError::OutsideLastStep { t, lo, hi: self.t });
+        }
+        if !self.started || t == self.t {
+            return Ok(self.zn[0]);
+        }
+        let s = (t - self.t) / self.hscale;
+        let mut y = self.zn[self.q];
+        for j in (0..self.q).rev() {
+            y = self.zn[j] + y * s;
+        }
+        Ok(y)
+    }
+
+    /// Steps until `t ≥ tout`, never past `tstop` (use `tstop = tout` to end exactly there;
+    /// `f64::INFINITY` for no stop). Then [`interpolate`](Self::interpolate) gives y(tout).
+    pub fn advance<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        tout: f64,
+        tstop: f64,
+    ) -> Result<(), SolverError> {
+        if tout < self.t - 100.0 * f64::EPSILON * self.t.abs() {
+            return Err(SolverError::TimeBehind {
+                t: self.t,
+                target: tout,
+            });
+        }
+        let mut taken = 0u64;
+        while self.t < tout {
+            if taken == self.cfg.max_steps {
+                return Err(SolverError::TooManySteps {
+                    t: self.t,
+                    max_steps: taken,
+                });
+            }
+            if self.step(sys, tstop)? == StepOutcome::ReachedStop && self.t < tout {
+                return Err(SolverError::TimeBehind {
+                    t: tstop,
+                    target: tout,
+                });
+            }
+            taken += 1;
+        }
+        Ok(())
+    }
+
+    /// Takes one step, never past `tstop`. A step whose end falls within round-off of `tstop`
+    /// ends exactly on it.
+    pub fn step<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        tstop: f64,
+    ) -> Result<StepOutcome, SolverError> {
+        if tstop <= self.t {
+            return Err(SolverError::TimeBehind {
+                t: self.t,
+                target: tstop,
+            });
+        }
+        if !self.started {
+            self.start(sys, tstop)?;
+        } else {
+            self.apply_pending(tstop);
+        }
+        let mut error_failures = 0u32;
+        let mut newton_failures = 0u32;
+        let mut conv_fail = ConvFail::None;
+        let dsm = loop {
+            self.check_step_size()?;
+            let t_prior = self.t;
+            self.predict();
+            self.set_coeffs();
+            if let Err(why) = self.newton(sys, conv_fail) {
+                self.restore(t_prior);
+                newton_failures += 1;
+                self.stats.newton_failures += 1;
+                self.eta_max = 1.0;
+                let at_floor = self.h.abs() <= self.cfg.h_min * (1.0 + 1e-12);
+                if newton_failures >= MAX_NEWTON_FAILURES
+                    || at_floor
+                    || self.cfg.fixed_step.is_some()
+                {
+                    return Err(match why {
+                        NewtonFail::NonFinite => SolverError::NonFiniteRhs { t: self.t },
+                        NewtonFail::Singular => SolverError::SingularMatrix {
+                            t: self.t,
+                            h: self.h,
+                        },
+                        NewtonFail::Diverged => SolverError::NewtonFailures {
+                            t: self.t,
+                            h: self.h,
+                            failures: newton_failures,
+                        },
+                    });
+                }
+                let eta = ETA_NEWTON_FAIL.max(self.cfg.h_min / self.h.abs());
+                self.rescale(eta);
+                conv_fail = ConvFail::Other;
+                continue;
+            }
+            if let Some(yp) = sys.project(self.t, &(self.zn[0] + self.acor)) {
+                self.acor = yp - self.zn[0];
+            }
+            let dsm = self.wrms(&self.acor) * self.coeffs.tq[2];
+            if dsm <= 1.0 || self.cfg.fixed_step.is_some() {
+                break dsm;
+            }
+            // Local error test failed (CVODE cvHandleNFlag / cvDoErrorTest).
+            self.restore(t_prior);
+            error_failures += 1;
+            self.stats.error_test_failures += 1;
+            self.eta_max = 1.0;
+            conv_fail = ConvFail::ErrorTest;
+            if error_failures >= MAX_ERROR_FAILURES {
+                return Err(SolverError::ErrorTestFailures {
+                    t: self.t,
+                    h: self.h,
+                    failures: error_failures,
+                });
+            }
+            let floor = self.cfg.h_min / self.h.abs();
+            if error_failures < ERROR_FAILURES_ORDER_DROP {
+                let mut eta = 1.0 / ((BIAS_SAME * dsm).powf(1.0 / (self.q + 1) as f64) + ADDON);
+                eta = eta.max(ETA_MIN).max(floor);
+                if error_failures >= ERROR_FAILURES_GROWTH_CAP {
+                    eta = eta.min(ETA_MAX_AFTER_FAILURES);
+                }
+                self.rescale(eta);
+            } else if self.q > 1 {
+                // Repeated failures: the history is suspect; drop the order.
+                lower_order(&mut self.zn, self.q, self.hscale, &self.tau);
+                self.q -= 1;
+                self.qwait = self.q + 1;
+                self.rescale(ETA_MIN.max(floor));
+            } else {
+                // Order 1 already: restart from a fresh derivative.
+                self.h *= ETA_MIN.max(floor);
+                self.hscale = self.h;
+                self.landing = None;
+                self.qwait = LONG_WAIT;
+                let (t, y) = (self.t, self.zn[0]);
+                let f = self.eval_rhs(sys, t, &y);
+                if !f.iter().all(|v| v.is_finite()) {
+                    return Err(SolverError::NonFiniteRhs { t: self.t });
+                }
+                self.zn[1] = f * self.h;
+            }
+        };
+        self.complete_step();
+        self.choose_next(dsm);
+        self.eta_max = ETA_MAX;
+        if self.landing.take().is_some() {
+            Ok(StepOutcome::ReachedStop)
+        } else {
+            Ok(StepOutcome::Stepped)
+        }
+    }
+
+    // ----- start, prediction, coefficients ------------------------------------------------
+
+    /// First step after `new` or `reinit`: f(t0, y0), the initial step size, order 1.
+    fn start<S: OdeSystem<N>>(&mut self, sys: &S, tstop: f64) -> Result<(), SolverError> {
+        self.stats.restarts += 1;
+        self.update_weights();
+        let (t0, y0) = (self.t, self.zn[0]);
+        let f0 = self.eval_rhs(sys, t0, &y0);
+        if !f0.iter().all(|v| v.is_finite()) {
+            return Err(SolverError::NonFiniteRhs { t: self.t });
+        }
+        let span = tstop - self.t;
+        let mut h = match (self.cfg.fixed_step, self.cfg.h_init) {
+            (Some(fixed), _) => fixed.h,
+            (None, Some(h)) => h,
+            (None, None) => self.initial_step(sys, &f0, span),
+        };
+        h = h.min(self.cfg.h_max).max(self.cfg.h_min);
+        self.landing = None;
+        if span <= h * (1.0 + LANDING_STRETCH) {
+            h = span;
+            self.landing = Some(tstop);
+        }
+        self.h = h;
+        self.hscale = h;
+        self.h_next = h;
+        self.zn[1] = f0 * h;
+        self.q = 1;
+        self.q_next = 1;
+        self.qwait = 2;
+        self.started = true;
+        Ok(())
+    }
+
+    /// Initial step: the BDF1 local error h²/2·‖y''‖ set to half the tolerance, with y''
+    /// estimated by a difference of f along an explicit Euler probe (in the spirit of Hairer,
+    /// Nørsett & Wanner I, §II.4, and CVODE's cvHin).
+    fn initial_step<S: OdeSystem<N>>(&mut self, sys: &S, f0: &SVector<f64, N>, span: f64) -> f64 {
+        let span = if span.is_finite() { span } else { 1.0e3 };
+        let d1 = self.wrms(f0);
+        let mut probe = if d1 > 1e-5 { 0.01 / d1 } else { 1e-6 };
+        probe = probe.min(0.01 * span).max(1e-12 * (1.0 + self.t.abs()));
+        let y1 = self.zn[0] + f0 * probe;
+        let f1 = self.eval_rhs(sys, self.t + probe, &y1);
+        let d2 = if f1.iter().all(|v| v.is_finite()) {
+            self.wrms(&(f1 - f0)) / probe
+        } else {
+            0.0
+        };
+        let h = if d2 > 1e-300 {
+            (0.5 / d2).sqrt()
+        } else {
+            100.0 * probe
+        };
+        h.min(100.0 * probe.max(1e-6)).min(0.1 * span)
+    }
+
+    /// Applies the order and step chosen after the last step, clipped to `tstop`.
+    fn apply_pending(&mut self, tstop: f64) {
+        if self.q_next > self.q {
+            let delta = self.zn[self.max_order()];
+            raise_order(&mut self.zn, self.q, self.hscale, &self.tau, &delta);
+            self.q += 1;
+            self.qwait = self.q + 1;
+        }
+        while self.q_next < self.q {
+            lower_order(&mut self.zn, self.q, self.hscale, &self.tau);
+            self.q -= 1;
+            self.qwait = self.q + 1;
+        }
+        let mut h = self.h_next;
+        self.landing = None;
+        let remaining = tstop - self.t;
+        if remaining <= h * (1.0 + LANDING_STRETCH) {
+            h = remaining;
+            self.landing = Some(tstop);
+        }
+        if h != self.hscale {
+            self.rescale(h / self.hscale);
+        } else {
+            self.h = h;
+        }
+    }
+
+    fn max_order(&self) -> usize {
+        match self.cfg.fixed_step {
+            Some(f) => f.order,
+            None => self.cfg.max_order,
+        }
+    }
+
+    fn check_step_size(&self) -> Result<(), SolverError> {
+        let resolution = 4.0 * f64::EPSILON * self.t.abs().max(self.h.abs());
+        if self.h.abs() <= resolution || self.h.abs() < self.cfg.h_min * (1.0 - 1e-12) {
+            return Err(SolverError::StepSizeTooSmall {
+                t: self.t,
+                h: self.h,
+            });
+        }
+        Ok(())
+    }
+
+    /// Advances t and predicts the Nordsieck array by the Pascal triangle.
+    fn predict(&mut self) {
+        self.t = match self.landing {
+            Some(tstop) => tstop,
+            None => self.t + self.h,
+        };
+        for k in 1..=self.q {
+            for j in (k..=self.q).rev() {
+                let add = self.zn[j];
+                self.zn[j - 1] += add;
+            }
+        }
+    }
+
+    /// Undoes [`predict`](Self::predict) after a rejected step.
+    fn restore(&mut self, t_prior: f64) {
+        self.t = t_prior;
+        for k in 1..=self.q {
+            for j in (k..=self.q).rev() {
+                let sub = self.zn[j];
+                self.zn[j - 1] -= sub;
+            }
+        }
+    }
+
+    /// Multiplies the step by `eta`: z_j ← η^j z_j.
+    fn rescale(&mut self, eta: f64) {
+        let mut factor = 1.0;
+        for j in 1..=self.q {
+            factor *= eta;
+            self.zn[j] *= factor;
+        }
+        self.h = self.hscale * eta;
+        self.hscale = self.h;
+        if let Some(tstop) = self.landing {
+            // A rescale after a failure abandons the landing.
+            if (self.t + self.h - tstop).abs() > 1e-12 * self.h.abs().max(tstop.abs()) {
+                self.landing = None;
+            }
+        }
+    }
+
+    fn set_coeffs(&mut self) {
+        self.coeffs = bdf_coeffs(self.q, self.h, &self.tau, self.qwait == 1);
+        self.gamma = self.h / self.coeffs.l[1];
+    }
+
+    // ----- Newton -------------------------------------------------------------------------
+
+    /// Solves the corrector equation γ·f(t_n, y_n) = z_1/l_1 + Δ for the correction
+    /// Δ = y_n − y_n(predicted) by modified Newton on I − γJ, reusing J and the LU.
+    fn newton<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        mut conv_fail: ConvFail,
+    ) -> Result<(), NewtonFail> {
+        loop {
+            let gamma_ratio = if self.lu.is_some() {
+                self.gamma / self.gamma_lu
+            } else {
+                1.0
+            };
+            let needs_setup = self.lu.is_none()
+                || conv_fail != ConvFail::None
+                || self.stats.steps >= self.steps_at_lu + REFACTOR_STEPS
+                || (gamma_ratio - 1.0).abs() > REFACTOR_GAMMA_RATIO;
+            let mut fresh_jac = false;
+            if needs_setup {
+                fresh_jac = !self.jac_valid
+                    || self.stats.steps >= self.steps_at_jac + REJAC_STEPS
+                    || conv_fail == ConvFail::Other
+                    || (conv_fail == ConvFail::BadJacobian
+                        && (gamma_ratio - 1.0).abs() < REJAC_GAMMA_RATIO);
+                if fresh_jac {
+                    self.evaluate_jacobian(sys)?;
+                }
+                self.factor()?;
+            }
+            match self.newton_iterate(sys) {
+                Ok(()) => return Ok(()),
+                Err(NewtonFail::Diverged) if !fresh_jac => conv_fail = ConvFail::BadJacobian,
+                Err(NewtonFail::NonFinite) if !fresh_jac => conv_fail = ConvFail::Other,
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn newton_iterate<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
+        let lu = self.lu.as_ref().ok_or(NewtonFail::Singular)?;
+        let gamma_ratio = self.gamma / self.gamma_lu;
+        // A stale γ in the LU is corrected by scaling the update (CVODE cvLsSolve for BDF).
+        let scale = if gamma_ratio != 1.0 {
+            2.0 / (1.0 + gamma_ratio)
+        } else {
+            1.0
+        };
+        let inv_l1 = 1.0 / self.coeffs.l[1];
+        let tol = NEWTON_COEF / self.coeffs.tq[2];
+        let mut acor = SVector::<f64, N>::zeros();
+        let mut y = self.zn[0];
+        let mut del_prev = 0.0;
+        for m in 0..NEWTON_MAX_ITERS {
+            let f = sys.rhs(self.t, &y);
+            self.stats.rhs_evals += 1;
+            self.stats.newton_iters += 1;
+            if !f.iter().all(|v| v.is_finite()) {
+                return Err(NewtonFail::NonFinite);
+            }
+            let residual = f * self.gamma - (self.zn[1] * inv_l1 + acor);
+            let delta = lu.solve(&residual) * scale;
+            acor += delta;
+            y = self.zn[0] + acor;
+            let del = self.wrms(&delta);
+            if !del.is_finite() {
+                return Err(NewtonFail::NonFinite);
+            }
+            if m > 0 {
+                self.rate = (RATE_DAMPING * self.rate).max(del / del_prev);
+            }
+            if del * self.rate.min(1.0) <= tol {
+                self.acor = acor;
+                return Ok(());
+            }
+            if m > 0 && del > DIVERGENCE_RATIO * del_prev {
+                break;
+            }
+            del_prev = del;
+        }
+        Err(NewtonFail::Diverged)
+    }
+
+    /// J at the predicted state: analytic if the system has one, else forward differences
+    /// with CVODE's increment rule (cvLsDenseDQJac): σ_j = max(√ε·|y_j|, m_inc/w_j) with
+    /// m_inc = 1000·|h|·ε·N·‖f‖_wrms.
+    fn evaluate_jacobian<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
+        let y = self.zn[0];
+        self.stats.jac_evals += 1;
+        self.steps_at_jac = self.stats.steps;
+        let jac = match sys.jacobian(self.t, &y) {
+            Some(j) => j,
+            None => {
+                let f0 = sys.rhs(self.t, &y);
+                self.stats.rhs_evals_jac += 1;
+                if !f0.iter().all(|v| v.is_finite()) {
+                    return Err(NewtonFail::NonFinite);
+                }
+                let fnorm = self.wrms(&f0);
+                let min_inc = if fnorm > 0.0 {
+                    FD_MIN_INC_MULT * self.h.abs() * f64::EPSILON * N as f64 * fnorm
+                } else {
+                    1.0
+                };
+                let sqrt_eps = f64::EPSILON.sqrt();
+                let mut jac = SMatrix::<f64, N, N>::zeros();
+                for j in 0..N {
+                    let inc = (sqrt_eps * y[j].abs()).max(min_inc / self.ewt[j]);
+                    let mut yj = y;
+                    yj[j] += inc;
+                    let fj = sys.rhs(self.t, &yj);
+                    self.stats.rhs_evals_jac += 1;
+                    jac.set_column(j, &((fj - f0) / inc));
+                }
+                jac
+            }
+        };
+        if !jac.iter().all(|v| v.is_finite()) {
+            self.jac_valid = false;
+            return Err(NewtonFail::NonFinite);
+        }
+        self.jac = jac;
+        self.jac_valid = true;
+        if self.cfg.stability_guard && self.cfg.fixed_step.is_none() {
+            self.guard.update(&self.jac);
+        } else {
+            self.guard.clear();
+        }
+        Ok(())
+    }
+
+    /// LU of I − γJ with the current γ.
+    fn factor(&mut self) -> Result<(), NewtonFail> {
+        let m = SMatrix::<f64, N, N>::identity() - self.jac * self.gamma;
+        self.lu = Lu::factor(&m);
+        self.stats.lu_factorizations += 1;
+        self.steps_at_lu = self.stats.steps;
+        self.gamma_lu = self.gamma;
+        self.rate = 1.0;
+        self.lu.as_ref().map(|_| ()).ok_or(NewtonFail::Singular)
+    }
+
+    // ----- after an accepted step ---------------------------------------------------------
+
+    fn complete_step(&mut self) {
+        self.stats.steps += 1;
+        self.hu = self.h;
+        self.qu = self.q;
+        for i in (2..=self.q).rev() {
+            self.tau[i] = self.tau[i - 1];
+        }
+        if self.q == 1 && self.stats.steps > 1 {
+            self.tau[2] = self.tau[1];
+        }
+        self.tau[1] = self.h;
+        for j in 0..=self.q {
+            let add = self.acor * self.coeffs.l[j];
+            self.zn[j] += add;
+        }
+        self.qwait = self.qwait.saturating_sub(1);
+        let qmax = self.max_order();
+        let fixed_raising = self.cfg.fixed_step.is_some() && self.q < qmax;
+        if (self.qwait == 1 || fixed_raising) && self.q != qmax {
+            // Keep this correction: the error estimate at order q+1 and the raise need it.
+            self.zn[qmax] = self.acor;
+            self.saved_tq5 = self.coeffs.tq[5];
+        }
+        self.update_weights();
+    }
+
+    /// Chooses the order and step of the next step from the error estimates at orders q−1,
+    /// q and q+1 (CVODE cvPrepareNextStep / cvChooseEta / cvSetEta), then applies the
+    /// stability guard.
+    fn choose_next(&mut self, dsm: f64) {
+        if let Some(fixed) = self.cfg.fixed_step {
+            self.h_next = fixed.h;
+            self.q_next = (self.q + 1).min(fixed.order);
+            return;
+        }
+        let q = self.q;
+        let (mut q_next, mut eta) = (q, 1.0);
+        if self.eta_max > 1.0 {
+            let eta_same = 1.0 / ((BIAS_SAME * dsm).powf(1.0 / (q + 1) as f64) + ADDON);
+            if self.qwait != 0 {
+                eta = eta_same;
+            } else {
+                self.qwait = 2;
+                let eta_down = if q > 1 {
+                    let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
+                    1.0 / ((BIAS_DOWN * ddn).powf(1.0 / q as f64) + ADDON)
+                } else {
+                    0.0
+                };
+                let qmax = self.cfg.max_order;
+                let eta_up = if q != qmax && self.saved_tq5 != 0.0 {
+                    let ratio = (self.coeffs.tq[5] / self.saved_tq5)
+                        * (self.h / self.tau[2]).powi(q as i32 + 1);
+                    let diff = self.acor - self.zn[qmax] * ratio;
+                    let dup = self.wrms(&diff) * self.coeffs.tq[3];
+                    1.0 / ((BIAS_UP * dup).powf(1.0 / (q + 2) as f64) + ADDON)
+                } else {
+                    0.0
+                };
+                eta = eta_same;
+                if eta_down > eta && eta_down >= eta_up {
+                    eta = eta_down;
+                    q_next = q - 1;
+                } else if eta_up > eta {
+                    eta = eta_up;
+                    q_next = q + 1;
+                    self.zn[qmax] = self.acor;
+                }
+            }
+            if eta < ETA_THRESHOLD {
+                eta = 1.0;
+                q_next = q;
+            } else {
+                eta = eta.min(self.eta_max);
+                eta /= (self.h.abs() * eta / self.cfg.h_max).max(1.0);
+            }
+        } else {
+            self.qwait = self.qwait.max(2);
+        }
+        let h_next = self.h * eta;
+        if self.cfg.stability_guard {
+            let safe = self.guard.max_safe_order(q_next, h_next);
+            if safe < q_next {
+                self.stats.order_caps += 1;
+                q_next = safe;
+            }
+        }
+        self.q_next = q_next;
+        self.h_next = h_next;
+    }
+
+    // ----- helpers ------------------------------------------------------------------------
+
+    fn eval_rhs<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        y: &SVector<f64, N>,
+    ) -> SVector<f64, N> {
+        self.stats.rhs_evals += 1;
+        sys.rhs(t, y)
+    }
+
+    fn update_weights(&mut self) {
+        let rtol = self.cfg.rtol;
+        self.ewt = self.zn[0].zip_map(&self.cfg.atol, |y, a| 1.0 / (rtol * y.abs() + a));
+    }
+
+    /// Weighted root-mean-square norm with the current error weights.
+    fn wrms(&self, v: &SVector<f64, N>) -> f64 {
+        let s: f64 = v
+            .iter()
+            .zip(self.ewt.iter())
+            .map(|(a, w)| (a * w) * (a * w))
+            .sum();
+        (s / N as f64).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::FixedStep;
+    use nalgebra::{Matrix2, Vector1, Vector2};
+
+    /// y' = −y, y(0) = 1.
+    struct Decay;
+    impl OdeSystem<1> for Decay {
+        fn rhs(&self, _t: f64, y: &Vector1<f64>) -> Vector1<f64> {
+            -y
+        }
+    }
+
+    /// Harmonic oscillator x'' = −ω²x as a first-order system, with its analytic Jacobian.
+    struct Oscillator(f64);
+    impl OdeSystem<2> for Oscillator {
+        fn rhs(&self, _t: f64, y: &Vector2<f64>) -> Vector2<f64> {
+            Vector2::new(y[1], -self.0 * self.0 * y[0])
+        }
+        fn jacobian(&self, _t: f64, _y: &Vector2<f64>) -> Option<Matrix2<f64>> {
+            Some(Matrix2::new(0.0, 1.0, -self.0 * self.0, 0.0))
+        }
+    }
+
+    #[test]
+    fn decay_to_tolerance_and_lands_on_stop() {
+        let mut s = Bdf::new(BdfConfig::new(1e-8), 0.0, Vector1::new(1.0)).unwrap();
+        s.advance(&Decay, 5.0, 5.0).unwrap();
+        assert_eq!(s.t(), 5.0);
+        let err = (s.y()[0] - (-5.0f64).exp()).abs();
+        assert!(err < 1e-8, "error {err}");
+        assert!(s.last_step().0 >= 3, "order rose to {}", s.last_step().0);
+    }
+
+    #[test]
+    fn dense_output_between_steps() {
+        let mut s = Bdf::new(BdfConfig::new(1e-9), 0.0, Vector1::new(1.0)).unwrap();
+        let mut worst: f64 = 0.0;
+        let mut k = 1;
+        while k <= 100 {
+            let tk = k as f64 * 0.05;
+            s.advance(&Decay, tk, f64::INFINITY).unwrap();
+            worst = worst.max((s.interpolate(tk).unwrap()[0] - (-tk).exp()).abs());
+            k += 1;
+        }
+        assert!(worst < 1e-8, "dense output error {worst}");
+        assert!(s.stats().steps < 200, "steps {}", s.stats().steps);
+        assert!(s.interpolate(s.t() + 1.0).is_err());
+    }
+
+    #[test]
+    fn clone_continues_identically() {
+        let mut a = Bdf::new(BdfConfig::new(1e-7), 0.0, Vector2::new(1.0, 0.0)).unwrap();
+        let osc = Oscillator(3.0);
+        a.advance(&osc, 1.0, f64::INFINITY).unwrap();
+        let mut b = a.clone();
+        a.advance(&osc, 4.0, 4.0).unwrap();
+        b.advance(&osc, 4.0, 4.0).unwrap();
+        assert_eq!(a.y(), b.y());
+        assert_eq!(a.stats(), b.stats());
+    }
+
+    #[test]
+    fn fixed_step_mode_keeps_the_step() {
+        let cfg = BdfConfig {
+            fixed_step: Some(FixedStep { h: 0.01, order: 3 }),
+            ..BdfConfig::new(1e-6)
+        };
+        let mut s = Bdf::new(cfg, 0.0, Vector1::new(1.0)).unwrap();
+        s.advance(&Decay, 1.0, 1.0).unwrap();
+        assert_eq!(s.stats().steps, 100);
+        assert_eq!(s.last_step().0, 3);
+        assert!((s.last_step().1 - 0.01).abs() < 1e-12);
+        assert_eq!(s.stats().rejected(), 0);
+    }
+
+    #[test]
+    fn bad_settings_name_the_field() {
+        let cfg = BdfConfig {
+            rtol: 0.0,
+            ..BdfConfig::<1>::new(1e-6)
+        };
+        let e = Bdf::new(cfg, 0.0, Vector1::new(1.0)).unwrap_err();
+        assert!(e.to_string().contains("rtol"), "{e}");
+        let e = Bdf::new(BdfConfig::new(1e-6), 0.0, Vector1::new(f64::NAN)).unwrap_err();
+        assert!(matches!(e, SolverError::NonFiniteState { .. }));
+    }
+}

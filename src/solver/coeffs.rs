@@ -1,0 +1,222 @@
+//! Coefficients of the fixed-leading-coefficient BDF in Nordsieck form, and the changes of
+//! the Nordsieck array when the order changes.
+//!
+//! Sources: K. R. Jackson and R. Sacks-Davis, "An alternative implementation of variable
+//! step-size multistep formulas for stiff ODEs", ACM TOMS 6 (1980) 295–318 (the
+//! fixed-leading-coefficient form); P. N. Brown, G. D. Byrne and A. C. Hindmarsh, "VODE",
+//! SIAM J. Sci. Stat. Comput. 10 (1989) 1038–1051; and the CVODE description in
+//! A. C. Hindmarsh et al., "SUNDIALS", ACM TOMS 31 (2005) 363–396, §2.1, whose error
+//! constants (tq) and order-change formulas these are.
+//!
+//! Notation. The new step goes from t_{n−1} to t_n = t_{n−1} + h. `tau[k]` (k ≥ 1) is the
+//! size of the k-th most recent accepted step. ξ_j = (t_n − t_{n−j}) / h, so ξ_1 = 1 and
+//! ξ_j = (h + τ_1 + … + τ_{j−1}) / h.
+
+use nalgebra::SVector;
+
+/// Highest BDF order.
+pub(crate) const QMAX: usize = 5;
+/// Columns of the Nordsieck array, z_j = h^j y^(j) / j!, j = 0..=QMAX.
+pub(crate) const NCOL: usize = QMAX + 1;
+
+/// Coefficients for one step of order q.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct StepCoeffs {
+    /// The corrector vector: after the step z_j ← z_j + l_j·Δ, with Δ the correction.
+    pub l: [f64; NCOL],
+    /// Error-estimate constants: tq[2] turns ‖Δ‖ into the local error at order q, tq[1] at
+    /// order q−1 (from z_q), tq[3] at order q+1 (from the difference of two corrections),
+    /// tq[5] rescales a saved correction to the current step. tq[1] and tq[3] are computed
+    /// only when an order change is being considered. Index 0 and 4 are unused.
+    pub tq: [f64; NCOL],
+}
+
+/// The ratios ξ_1..=ξ_{q+1} of the new step (index 0 unused).
+fn xi_ratios(q: usize, h: f64, tau: &[f64; NCOL + 1]) -> [f64; NCOL + 1] {
+    let mut xi = [0.0; NCOL + 1];
+    let mut span = h;
+    xi[1] = 1.0;
+    for j in 2..=(q + 1).min(NCOL) {
+        span += tau[j - 1];
+        xi[j] = span / h;
+    }
+    xi
+}
+
+/// Coefficients of the order-q step of size h after the steps `tau`.
+///
+/// `order_change` asks for tq[1] and tq[3], which need one more past step.
+pub(crate) fn bdf_coeffs(
+    q: usize,
+    h: f64,
+    tau: &[f64; NCOL + 1],
+    order_change: bool,
+) -> StepCoeffs {
+    debug_assert!((1..=QMAX).contains(&q));
+    let xi = xi_ratios(q, h, tau);
+    let qf = q as f64;
+
+    // Λ(x) = Π_{j=1}^{q−1} (1 + x/ξ_j) · (1 + x/ξ*): the l_j are its coefficients.
+    let mut l = [0.0; NCOL];
+    l[0] = 1.0;
+    for &x in &xi[1..q] {
+        for i in (1..=q).rev() {
+            l[i] += l[i - 1] / x;
+        }
+    }
+    // α0 = −Σ 1/j is the leading coefficient of the fixed-leading-coefficient formula;
+    // α̂0 = −Σ 1/ξ_j that of the variable-coefficient formula on the same points.
+    let alpha0 = -(1..=q).map(|j| 1.0 / j as f64).sum::<f64>();
+    let sum_inv_xi_head: f64 = xi[1..q].iter().map(|x| 1.0 / x).sum();
+    let alpha0_hat = -sum_inv_xi_head - 1.0 / xi[q];
+    // 1/ξ* is chosen so that l_1 = −α0.
+    let inv_xi_star = if q == 1 {
+        1.0
+    } else {
+        -sum_inv_xi_head - alpha0
+    };
+    for i in (1..=q).rev() {
+        l[i] += l[i - 1] * inv_xi_star;
+    }
+
+    let mut tq = [0.0; NCOL];
+    let a1 = 1.0 - alpha0_hat + alpha0;
+    let a2 = 1.0 + qf * a1;
+    tq[2] = (a1 / (alpha0 * a2)).abs();
+    tq[5] = (a2 * inv_xi_star / (l[q] / xi[q])).abs();
+    if order_change {
+        tq[1] = if q > 1 {
+            let c = inv_xi_star / l[q];
+            let a3 = alpha0 + 1.0 / qf;
+            let a4 = alpha0_hat + 1.0 / xi[q];
+            (c * (1.0 - a4 + a3) / a3).abs()
+        } else {
+            1.0
+        };
+        let inv_xi_next = 1.0 / xi[q + 1];
+        let a5 = alpha0 - 1.0 / (qf + 1.0);
+        let a6 = alpha0_hat - inv_xi_next;
+        let c_next = (1.0 - a6 + a5) / a2;
+        tq[3] = (c_next / (inv_xi_next * (qf + 2.0) * a5)).abs();
+    }
+    StepCoeffs { l, tq }
+}
+
+/// Raises the order from q to q+1 after an accepted step of order q: fills z_{q+1} from the
+/// saved correction `delta` of that step and adjusts z_2..z_q so the array stays the
+/// Nordsieck array of a polynomial through the same history.
+///
+/// `hscale` is the step the array is scaled with (the last step), `tau` the step history.
+pub(crate) fn raise_order<const N: usize>(
+    zn: &mut [SVector<f64, N>; NCOL],
+    q: usize,
+    hscale: f64,
+    tau: &[f64; NCOL + 1],
+    delta: &SVector<f64, N>,
+) {
+    debug_assert!(q < QMAX);
+    // Distances back from t_n in units of hscale: (τ_1 + … + τ_{j+1}) / hscale.
+    let mut c = [0.0; NCOL + 1];
+    c[2] = 1.0;
+    let mut alpha0 = -1.0;
+    let mut alpha1 = 1.0;
+    let mut prod = 1.0;
+    let mut prev = 1.0;
+    let mut span = hscale;
+    for j in 1..q {
+        span += tau[j + 1];
+        let x = span / hscale;
+        prod *= x;
+        alpha0 -= 1.0 / (j + 1) as f64;
+        alpha1 += 1.0 / x;
+        for i in (2..=j + 2).rev() {
+            c[i] = c[i] * prev + c[i - 1];
+        }
+        prev = x;
+    }
+    let a1 = (-alpha0 - alpha1) / prod;
+    zn[q + 1] = delta * a1;
+    for j in 2..=q {
+        let add = zn[q + 1] * c[j];
+        zn[j] += add;
+    }
+}
+
+/// Lowers the order from q to q−1: drops z_q and adjusts z_2..z_{q−1}.
+pub(crate) fn lower_order<const N: usize>(
+    zn: &mut [SVector<f64, N>; NCOL],
+    q: usize,
+    hscale: f64,
+    tau: &[f64; NCOL + 1],
+) {
+    debug_assert!(q >= 2);
+    let mut c = [0.0; NCOL + 1];
+    c[2] = 1.0;
+    let mut span = 0.0;
+    for (j, step) in tau.iter().enumerate().take(q.saturating_sub(1)).skip(1) {
+        span += step;
+        let x = span / hscale;
+        for i in (2..=j + 2).rev() {
+            c[i] = c[i] * x + c[i - 1];
+        }
+    }
+    for j in 2..q {
+        let sub = zn[q] * c[j];
+        zn[j] -= sub;
+    }
+    zn[q] = SVector::zeros();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// At constant step the formula is the classical BDF; its Nordsieck vectors for BDF1–3
+    /// are those of Byrne & Hindmarsh (1975), table I.
+    #[test]
+    fn constant_step_l_vectors() {
+        let tau = [0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
+        let c1 = bdf_coeffs(1, 1.0, &tau, false);
+        assert_eq!(&c1.l[..2], &[1.0, 1.0]);
+        let c2 = bdf_coeffs(2, 1.0, &tau, false);
+        // Normalised so that l_0 = 1: BDF2 gives (1, 3/2, 1/2), BDF3 (1, 11/6, 1, 1/6).
+        assert!((c2.l[1] - 1.5).abs() < 1e-15 && (c2.l[2] - 0.5).abs() < 1e-15);
+        let c3 = bdf_coeffs(3, 1.0, &tau, false);
+        assert!((c3.l[1] - 11.0 / 6.0).abs() < 1e-15);
+        assert!((c3.l[2] - 1.0).abs() < 1e-15);
+        assert!((c3.l[3] - 1.0 / 6.0).abs() < 1e-15);
+    }
+
+    /// l_1 = Σ_{j≤q} 1/j for every order and any step history (fixed leading coefficient).
+    #[test]
+    fn leading_coefficient_is_fixed() {
+        let tau = [0.0, 0.7, 1.3, 0.4, 2.0, 0.9, 1.1];
+        for q in 1..=QMAX {
+            let c = bdf_coeffs(q, 0.5, &tau, true);
+            let want: f64 = (1..=q).map(|j| 1.0 / j as f64).sum();
+            assert!((c.l[1] - want).abs() < 1e-14, "q = {q}");
+            assert_eq!(c.l[0], 1.0);
+            assert!(c.tq[1..=5]
+                .iter()
+                .enumerate()
+                .all(|(i, t)| i == 3 || t.is_finite()));
+        }
+    }
+
+    /// Raising then lowering the order at constant step returns the original array.
+    #[test]
+    fn raise_then_lower_is_identity_on_old_columns() {
+        let tau = [0.0, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1];
+        let mut zn = [SVector::<f64, 1>::zeros(); NCOL];
+        for (j, z) in zn.iter_mut().enumerate().take(4) {
+            z[0] = 1.0 / (j as f64 + 1.0);
+        }
+        let before = zn;
+        let delta = SVector::<f64, 1>::new(0.3);
+        raise_order(&mut zn, 3, 0.1, &tau, &delta);
+        lower_order(&mut zn, 4, 0.1, &tau);
+        for j in 0..=3 {
+            assert!((zn[j][0] - before[j][0]).abs() < 1e-14, "column {j}");
+        }
+    }
+}

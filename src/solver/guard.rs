@@ -1,0 +1,230 @@
+//! The stability guard: an order cap against the BDF3–5 instability near the imaginary axis.
+//!
+//! BDF3–5 are only A(α)-stable. For an undamped mode λ = ±iω the largest root of the
+//! order-q formula at constant step exceeds 1 for h·ω in a band (numerics-notes.md; Hairer &
+//! Wanner, *Solving ODEs II*, §V.2): the parasitic amplitude then grows by up to 4.6 %, 19 %
+//! and 38 % per step for q = 3, 4, 5. The error controller cannot see a mode whose amplitude
+//! is below the tolerance, so it may park h inside the band; the mode then grows until the
+//! controller reacts by shrinking h, which for h·ω above the peak makes the growth worse.
+//!
+//! With N ≤ 8 states the eigenvalues of J are cheap. Each time J is evaluated we store its
+//! weakly damped oscillatory modes; before each step the order is capped so that no such mode
+//! has h·|λ| inside the unstable band of the order used. BDF1 and BDF2 are A-stable and are
+//! never capped.
+
+use nalgebra::{DMatrix, SMatrix};
+
+/// The angle α (degrees) of A(α)-stability of BDF_q, index q (Hairer & Wanner II, table V.2.1).
+/// Modes within α of the negative real axis are stable at any step.
+pub const A_STABILITY_ANGLE_DEG: [f64; 6] = [90.0, 90.0, 90.0, 86.03, 73.35, 51.84];
+
+/// The band of h·ω, for λ = iω, in which BDF_q is unstable: the upper end is where the largest
+/// root falls back to 1, the lower end where it first exceeds 1 + 10⁻³ per step (below that
+/// the growth is of the size of the truncation error, which the error test controls). The
+/// ends are rounded outwards; `tests::bands_match_root_moduli` recomputes them.
+pub fn unstable_band(q: usize) -> Option<(f64, f64)> {
+    match q {
+        3 => Some((0.25, 1.94)),
+        4 => Some((0.38, 4.72)),
+        5 => Some((0.72, 9.40)),
+        _ => None,
+    }
+}
+
+/// Largest number of modes stored (one per complex-conjugate pair).
+const MAX_MODES: usize = 8;
+/// Modes whose eigenvalue lies more than this angle (degrees) from the negative real axis
+/// into the right half-plane are growing physically (e.g. buckling); capping the order does
+/// not help them and they are ignored.
+const MAX_ANGLE_DEG: f64 = 95.0;
+
+/// One weakly damped mode: |λ| and its angle from the negative real axis in degrees.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Mode {
+    modulus: f64,
+    angle_deg: f64,
+}
+
+/// The oscillatory modes of the last Jacobian.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct StabilityGuard {
+    modes: [Mode; MAX_MODES],
+    count: usize,
+}
+
+impl StabilityGuard {
+    /// Stores the oscillatory modes of `jac`. Called at Jacobian evaluations only (not every
+    /// step); this is the one place the integrator allocates, for nalgebra's Schur form.
+    pub(crate) fn update<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
+        self.count = 0;
+        if !jac.iter().all(|x| x.is_finite()) {
+            return;
+        }
+        let dynamic = DMatrix::from_column_slice(N, N, jac.as_slice());
+        let Some(schur) = nalgebra::Schur::try_new(dynamic, 1e-14, 200 * N.max(1)) else {
+            return;
+        };
+        for ev in schur.complex_eigenvalues().iter() {
+            if ev.im <= 0.0 || self.count == MAX_MODES {
+                continue;
+            }
+            let angle_deg = ev.im.atan2(-ev.re).to_degrees();
+            if angle_deg <= MAX_ANGLE_DEG {
+                self.modes[self.count] = Mode {
+                    modulus: ev.norm(),
+                    angle_deg,
+                };
+                self.count += 1;
+            }
+        }
+    }
+
+    /// Forgets the stored modes (the guard then allows any order).
+    pub(crate) fn clear(&mut self) {
+        self.count = 0;
+    }
+
+    /// The highest order ≤ `q` at which step `h` keeps every stored mode outside the
+    /// unstable band.
+    pub(crate) fn max_safe_order(&self, q: usize, h: f64) -> usize {
+        let mut k = q;
+        while k >= 3 && !self.safe(k, h) {
+            k -= 1;
+        }
+        k
+    }
+
+    fn safe(&self, q: usize, h: f64) -> bool {
+        let Some((lo, hi)) = unstable_band(q) else {
+            return true;
+        };
+        self.modes[..self.count].iter().all(|m| {
+            let x = h.abs() * m.modulus;
+            m.angle_deg <= A_STABILITY_ANGLE_DEG[q] || x < lo || x > hi
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix2;
+
+    type C = (f64, f64);
+    fn mul(a: C, b: C) -> C {
+        (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+    }
+    fn div(a: C, b: C) -> C {
+        let d = b.0 * b.0 + b.1 * b.1;
+        ((a.0 * b.0 + a.1 * b.1) / d, (a.1 * b.0 - a.0 * b.1) / d)
+    }
+    fn sub(a: C, b: C) -> C {
+        (a.0 - b.0, a.1 - b.1)
+    }
+
+    /// Largest |ζ| of BDF_q applied to y' = λy with hλ = z: the roots of
+    /// Σ_{j=1}^{q} (1/j)(1 − w)^j = z in w = 1/ζ, by Durand–Kerner iteration.
+    fn max_root_modulus(q: usize, z: C) -> f64 {
+        // Coefficients of the polynomial in w, ascending.
+        let mut c = vec![(0.0, 0.0); q + 1];
+        for j in 1..=q {
+            // (1 − w)^j by the binomial theorem.
+            let mut binom = 1.0;
+            for (k, ck) in c.iter_mut().enumerate().take(j + 1) {
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                ck.0 += sign * binom / j as f64;
+                binom = binom * (j - k) as f64 / (k + 1) as f64;
+            }
+        }
+        c[0] = sub(c[0], z);
+        let lead = c[q];
+        let monic: Vec<C> = c.iter().map(|&a| div(a, lead)).collect();
+        let eval = |w: C| {
+            let mut acc = monic[q];
+            for k in (0..q).rev() {
+                acc = mul(acc, w);
+                acc = (acc.0 + monic[k].0, acc.1 + monic[k].1);
+            }
+            acc
+        };
+        let mut roots: Vec<C> = (0..q)
+            .map(|k| {
+                let a = 0.4 + 0.9 * k as f64;
+                (
+                    0.9_f64.powi(k as i32) * a.cos(),
+                    0.9_f64.powi(k as i32) * a.sin(),
+                )
+            })
+            .collect();
+        for _ in 0..500 {
+            for i in 0..q {
+                let mut den = (1.0, 0.0);
+                for j in 0..q {
+                    if i != j {
+                        den = mul(den, sub(roots[i], roots[j]));
+                    }
+                }
+                roots[i] = sub(roots[i], div(eval(roots[i]), den));
+            }
+        }
+        roots
+            .iter()
+            .map(|w| 1.0 / (w.0 * w.0 + w.1 * w.1).sqrt())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn root_finder_reproduces_known_peaks() {
+        // numerics-notes.md: worst growth per step 1.046, 1.19, 1.38 for BDF3, 4, 5.
+        let peak = |q| {
+            (1..2000)
+                .map(|i| max_root_modulus(q, (0.0, i as f64 * 0.005)))
+                .fold(0.0, f64::max)
+        };
+        assert!((peak(3) - 1.0456).abs() < 1e-3);
+        assert!((peak(4) - 1.1910).abs() < 1e-3);
+        assert!((peak(5) - 1.3791).abs() < 1e-3);
+        // BDF2 is A-stable: no growth anywhere on the imaginary axis.
+        assert!((1..400).all(|i| max_root_modulus(2, (0.0, i as f64 * 0.05)) <= 1.0 + 1e-12));
+    }
+
+    #[test]
+    fn bands_match_root_moduli() {
+        for q in 3..=5 {
+            let (lo, hi) = unstable_band(q).unwrap();
+            // Just inside the band the growth exceeds 1 + 1e-3 (lower end) or 1 (upper end).
+            assert!(
+                max_root_modulus(q, (0.0, lo + 0.01)) > 1.0 + 1e-3,
+                "q={q} lo"
+            );
+            assert!(max_root_modulus(q, (0.0, hi - 0.01)) > 1.0, "q={q} hi");
+            // The edges are tight to within 0.02 and rounded outwards.
+            assert!(
+                max_root_modulus(q, (0.0, lo - 0.02)) < 1.0 + 1e-3,
+                "q={q} below"
+            );
+            assert!(max_root_modulus(q, (0.0, hi)) <= 1.0 + 1e-9, "q={q} above");
+            assert!(max_root_modulus(q, (0.0, hi - 0.02)) > 1.0, "q={q} tight");
+        }
+    }
+
+    #[test]
+    fn caps_order_for_undamped_mode_in_band() {
+        let omega = 100.0;
+        let jac = Matrix2::new(0.0, 1.0, -omega * omega, 0.0);
+        let mut g = StabilityGuard::default();
+        g.update(&jac);
+        assert_eq!(g.count, 1);
+        assert!((g.modes[0].modulus - omega).abs() < 1e-9);
+        // h·ω = 2: inside the bands of BDF4 and BDF5 and above BDF3's.
+        assert_eq!(g.max_safe_order(5, 0.02), 3);
+        // h·ω = 0.1: below every band.
+        assert_eq!(g.max_safe_order(5, 0.001), 5);
+        // h·ω = 1: BDF5 and BDF4 unsafe, and BDF3 too: cap at 2.
+        assert_eq!(g.max_safe_order(5, 0.01), 2);
+        // A strongly damped mode (angle within α_5) never caps.
+        let damped = Matrix2::new(0.0, 1.0, -omega * omega, -1.9 * omega);
+        g.update(&damped);
+        assert_eq!(g.max_safe_order(5, 0.02), 5);
+    }
+}

@@ -1,0 +1,92 @@
+//! Dense LU with partial pivoting for the small Newton matrices (N ≤ 8), on the stack.
+//!
+//! nalgebra's `LU` needs typenum bounds (`Const<N>: DimMin`) that a generic `const N` cannot
+//! name, and this is twenty lines (Golub & Van Loan, *Matrix Computations*, alg. 3.4.1).
+
+use nalgebra::{SMatrix, SVector};
+
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Lu<const N: usize> {
+    /// L (unit lower, below the diagonal) and U (on and above it), row-permuted.
+    factors: SMatrix<f64, N, N>,
+    /// Row `i` of the factors is row `perm[i]` of the original matrix.
+    perm: [usize; N],
+}
+
+impl<const N: usize> Lu<N> {
+    /// Factors `a`; `None` if a pivot is zero, non-finite or below round-off of ‖a‖.
+    pub(crate) fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
+        let mut f = *a;
+        let mut perm = [0usize; N];
+        for (i, p) in perm.iter_mut().enumerate() {
+            *p = i;
+        }
+        let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let tiny = scale * f64::EPSILON * N as f64;
+        for k in 0..N {
+            let (mut piv, mut best) = (k, f[(k, k)].abs());
+            for i in k + 1..N {
+                if f[(i, k)].abs() > best {
+                    piv = i;
+                    best = f[(i, k)].abs();
+                }
+            }
+            if !(best.is_finite() && best > tiny) {
+                return None;
+            }
+            if piv != k {
+                f.swap_rows(k, piv);
+                perm.swap(k, piv);
+            }
+            let d = f[(k, k)];
+            for i in k + 1..N {
+                let m = f[(i, k)] / d;
+                f[(i, k)] = m;
+                for j in k + 1..N {
+                    f[(i, j)] -= m * f[(k, j)];
+                }
+            }
+        }
+        Some(Self { factors: f, perm })
+    }
+
+    /// Solves `a x = b`.
+    pub(crate) fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        let f = &self.factors;
+        let mut x = SVector::<f64, N>::from_fn(|i, _| b[self.perm[i]]);
+        for i in 0..N {
+            for j in 0..i {
+                x[i] -= f[(i, j)] * x[j];
+            }
+        }
+        for i in (0..N).rev() {
+            for j in i + 1..N {
+                x[i] -= f[(i, j)] * x[j];
+            }
+            x[i] /= f[(i, i)];
+        }
+        x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix3, Vector3};
+
+    #[test]
+    fn solves_with_pivoting() {
+        let a = Matrix3::new(0.0, 2.0, 1.0, 1.0, 1.0, 0.0, 3.0, 0.0, 1.0);
+        let x = Vector3::new(1.0, -2.0, 0.5);
+        let lu = Lu::factor(&a).unwrap();
+        assert!((lu.solve(&(a * x)) - x).norm() < 1e-14);
+    }
+
+    #[test]
+    fn rejects_singular_and_nan() {
+        let a = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 1.0, 1.0);
+        assert!(Lu::factor(&a).is_none());
+        let b = Matrix3::new(f64::NAN, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(Lu::factor(&b).is_none());
+    }
+}

@@ -1,0 +1,21 @@
+use nalgebra::{SMatrix, SVector};
+
+/// A first-order system `y' = f(t, y)` of `N` equations.
+pub trait OdeSystem<const N: usize> {
+    /// The right-hand side `f(t, y)`.
+    fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N>;
+
+    /// The Jacobian `∂f/∂y`, when the system has an analytic one. `None` (the default) makes
+    /// the solver use forward differences.
+    fn jacobian(&self, _t: f64, _y: &SVector<f64, N>) -> Option<SMatrix<f64, N, N>> {
+        None
+    }
+
+    /// Projection onto an invariant manifold (constraint stabilisation after each accepted
+    /// step, the pattern of CVODE's `CVodeSetProjFn`). `None` (the default) means no
+    /// projection. The projected point must be close to `y`: the difference is added to the
+    /// step's correction and enters its error test.
+    fn project(&self, _t: f64, _y: &SVector<f64, N>) -> Option<SVector<f64, N>> {
+        None
+    }
+}
