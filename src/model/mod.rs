@@ -1,0 +1,18 @@
+//! The beam–body model: parameters, φ(t) sources, the four formulations, hinge reactions and
+//! energy. Equations are derived in `dynamics.rs` from the energies of
+//! `shared/model-notes.md` (paper eq. 8–13). No I/O, no `unsafe`.
+#![forbid(unsafe_code)]
+
+mod dynamics;
+mod formulation;
+mod kinematics;
+mod params;
+mod phi;
+mod systems;
+
+pub use dynamics::{BeamBody, Modes, Reactions};
+pub use formulation::Formulation;
+pub use kinematics::{pq, u1, u1_accel_bias};
+pub use params::{ParamError, Params};
+pub use phi::{PaperLaw, Phi, PhiPiece, TaylorSignal};
+pub use systems::{DaeSystem, Outputs, TwoDofSystem};

@@ -1,0 +1,177 @@
+//! The formulations as first-order systems for the integrator, and the outputs they report.
+//!
+//! State layouts: `TwoDofSystem` (reduced, linear): y = (v1, ϑ1, v̇1, ϑ̇1);
+//! `DaeSystem` (dae, dae-stabilized): y = (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2).
+
+use super::dynamics::{BeamBody, Reactions};
+use super::kinematics::{pq, u1, u1_accel_bias};
+use super::phi::{Phi, PhiPiece};
+use crate::solver::OdeSystem;
+use nalgebra::{SVector, Vector2, Vector3, Vector4, Vector6};
+
+/// Everything reported at one instant (SI units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outputs {
+    pub t: f64,
+    /// Tip deflection [m], tip section rotation [rad], body's axial hinge displacement [m].
+    pub v1: f64,
+    pub theta1: f64,
+    pub u2: f64,
+    /// Their rates [m/s, rad/s, m/s].
+    pub dv1: f64,
+    pub dtheta1: f64,
+    pub du2: f64,
+    pub phi: Phi,
+    pub reactions: Reactions,
+    /// Total mechanical energy [J].
+    pub energy: f64,
+    /// Constraint residual u2 − u1(v1, ϑ1) [m]: identically 0 where u2 is computed from (21).
+    pub drift: f64,
+}
+
+impl Outputs {
+    /// Column names, in the order of [`values`](Self::values).
+    pub const COLUMNS: [&'static str; 15] = [
+        "t", "v1", "theta1", "u2", "dv1", "dtheta1", "du2", "phi", "dphi", "ddphi", "N", "P", "M",
+        "energy", "drift",
+    ];
+
+    pub fn values(&self) -> [f64; 15] {
+        [
+            self.t,
+            self.v1,
+            self.theta1,
+            self.u2,
+            self.dv1,
+            self.dtheta1,
+            self.du2,
+            self.phi.phi,
+            self.phi.dphi,
+            self.phi.ddphi,
+            self.reactions.n,
+            self.reactions.p,
+            self.reactions.m,
+            self.energy,
+            self.drift,
+        ]
+    }
+}
+
+/// Eq. (15) (`linear = false`) or eq. (16) (`linear = true`).
+#[derive(Clone, Copy, Debug)]
+pub struct TwoDofSystem<'a> {
+    pub model: &'a BeamBody,
+    pub phi: PhiPiece,
+    pub linear: bool,
+}
+
+impl TwoDofSystem<'_> {
+    fn split(y: &Vector4<f64>) -> (Vector2<f64>, Vector2<f64>) {
+        (Vector2::new(y[0], y[1]), Vector2::new(y[2], y[3]))
+    }
+
+    /// The outputs at (t, y): u2 from (21), reactions from (19) with the hinge's axial
+    /// acceleration ü1 = −p v̈1 − l q ϑ̈1 − w.
+    pub fn outputs(&self, t: f64, y: &Vector4<f64>) -> Outputs {
+        let phi = self.phi.eval(t);
+        let (q, qd) = Self::split(y);
+        let acc = self.model.two_dof_accel(self.linear, &phi, q, qd);
+        let l = self.model.params.l;
+        let (p, qq) = pq(l, q[0], q[1]);
+        let u2 = u1(l, q[0], q[1]);
+        let du2 = -p * qd[0] - l * qq * qd[1];
+        let ddu = -p * acc[0] - l * qq * acc[1] - u1_accel_bias(l, qd[0], qd[1]);
+        Outputs {
+            t,
+            v1: q[0],
+            theta1: q[1],
+            u2,
+            dv1: qd[0],
+            dtheta1: qd[1],
+            du2,
+            phi,
+            reactions: self.model.reactions(&phi, q[1], qd[1], acc[1], acc[0], ddu),
+            energy: self.model.energy(&phi, q, qd, u2, du2),
+            drift: 0.0,
+        }
+    }
+}
+
+impl OdeSystem<4> for TwoDofSystem<'_> {
+    fn rhs(&self, t: f64, y: &Vector4<f64>) -> Vector4<f64> {
+        let (q, qd) = Self::split(y);
+        let acc = self
+            .model
+            .two_dof_accel(self.linear, &self.phi.eval(t), q, qd);
+        Vector4::new(qd[0], qd[1], acc[0], acc[1])
+    }
+}
+
+/// Eq. (20)+(21), constraint differentiated twice; `stabilized` projects onto the
+/// constraint manifold u2 = u1(v1, ϑ1), u̇2 = −p v̇1 − l q ϑ̇1.
+#[derive(Clone, Copy, Debug)]
+pub struct DaeSystem<'a> {
+    pub model: &'a BeamBody,
+    pub phi: PhiPiece,
+    pub stabilized: bool,
+}
+
+impl DaeSystem<'_> {
+    fn split(y: &Vector6<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        (
+            Vector3::new(y[0], y[1], y[2]),
+            Vector3::new(y[3], y[4], y[5]),
+        )
+    }
+
+    /// The consistent state with the same v1, ϑ1, v̇1, ϑ̇1.
+    pub fn consistent(&self, y: &Vector6<f64>) -> Vector6<f64> {
+        let l = self.model.params.l;
+        let (p, qq) = pq(l, y[0], y[1]);
+        let mut out = *y;
+        out[2] = u1(l, y[0], y[1]);
+        out[5] = -p * y[3] - l * qq * y[4];
+        out
+    }
+
+    /// The outputs at (t, y), reactions from (19) with ẍ_h = ü2; projected first when
+    /// stabilised, so the dense output is consistent too.
+    pub fn outputs(&self, t: f64, y: &Vector6<f64>) -> Outputs {
+        let y = if self.stabilized {
+            self.consistent(y)
+        } else {
+            *y
+        };
+        let phi = self.phi.eval(t);
+        let (x, xd) = Self::split(&y);
+        let acc = self.model.dae_accel(&phi, x, xd);
+        let (q, qd) = (Vector2::new(x[0], x[1]), Vector2::new(xd[0], xd[1]));
+        Outputs {
+            t,
+            v1: x[0],
+            theta1: x[1],
+            u2: x[2],
+            dv1: xd[0],
+            dtheta1: xd[1],
+            du2: xd[2],
+            phi,
+            reactions: self
+                .model
+                .reactions(&phi, x[1], xd[1], acc[1], acc[0], acc[2]),
+            energy: self.model.energy(&phi, q, qd, x[2], xd[2]),
+            drift: x[2] - u1(self.model.params.l, x[0], x[1]),
+        }
+    }
+}
+
+impl OdeSystem<6> for DaeSystem<'_> {
+    fn rhs(&self, t: f64, y: &Vector6<f64>) -> Vector6<f64> {
+        let (x, xd) = Self::split(y);
+        let acc = self.model.dae_accel(&self.phi.eval(t), x, xd);
+        Vector6::new(xd[0], xd[1], xd[2], acc[0], acc[1], acc[2])
+    }
+
+    fn project(&self, _t: f64, y: &SVector<f64, 6>) -> Option<SVector<f64, 6>> {
+        self.stabilized.then(|| self.consistent(y))
+    }
+}
