@@ -1,0 +1,319 @@
+//! `beam-body`: the standalone solver. Runs the model without FMI.
+//!
+//! ```text
+//! beam-body simulate SCENE.toml [--formulation F] [--rtol X] [--atol X] [--set NAME=VALUE]...
+//!                    [--fixed-step H --order K] [--max-order K] [--no-guard] [-o OUT.csv]
+//! beam-body modes [SCENE.toml] [--set NAME=VALUE]...
+//! beam-body residual --formulation F [--set NAME=VALUE]...   (stdin → stdout, for the oracle)
+//! ```
+
+use beam_body::model::{BeamBody, Formulation, Outputs, Phi};
+use beam_body::sim::{simulate, Scene};
+use nalgebra::{Vector2, Vector3};
+use std::f64::consts::PI;
+use std::io::{self, BufRead, BufWriter, Write};
+use std::process::ExitCode;
+use std::time::Instant;
+
+const USAGE: &str = "\
+usage:
+  beam-body simulate SCENE.toml [options] [-o OUT.csv]
+      Runs a scene and writes CSV (t,v1,theta1,u2,dv1,dtheta1,du2,phi,dphi,ddphi,N,P,M,energy,drift;
+      SI units) at t = k*dt_out up to and including t_end; to stdout without -o.
+      Run statistics go to stderr.
+  beam-body modes [SCENE.toml] [--set NAME=VALUE]...
+      Small-oscillation periods about the static equilibrium at phi = 0, pi/2, pi.
+  beam-body residual --formulation F [--set NAME=VALUE]...
+      Reads states from stdin, one per line:
+        reduced, linear:     phi dphi ddphi v1 theta1 dv1 dtheta1 ddv1 ddtheta1
+        dae, dae-stabilized: phi dphi ddphi v1 theta1 u2 dv1 dtheta1 du2 ddv1 ddtheta1 ddu2
+      and writes the residuals of the equations of motion, then the accelerations of the
+      model's right-hand side.
+
+options:
+  --formulation F     reduced | dae | dae-stabilized | linear   (default reduced)
+  --rtol X            relative tolerance, in [1e-14, 1]          (default 1e-6)
+  --atol X            absolute tolerance, > 0                    (default 1e-3*rtol)
+  --set NAME=VALUE    any scene key: l EI m M2 J_C r g t_rot phi_end phi0 t_end dt_out
+                      v1_0 theta1_0 dv1_0 dtheta1_0 rtol atol max_order
+  --fixed-step H      the paper's constant-step BDF with step H [s]
+  --order K           order of the constant-step BDF, 1..=5      (default 2)
+  --max-order K       highest order of the adaptive BDF, 1..=5   (default 5)
+  --no-guard          switch off the BDF3-5 stability guard
+  -o FILE             write the CSV to FILE
+";
+
+/// A command-line or input error: printed as `error: …`, exit code 2.
+struct Usage(String);
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("simulate") => cmd_simulate(&args[1..]),
+        Some("modes") => cmd_modes(&args[1..]),
+        Some("residual") => cmd_residual(&args[1..]),
+        Some("help" | "--help" | "-h") => {
+            print!("{USAGE}");
+            Ok(())
+        }
+        Some(other) => Err(Usage(format!("unknown command `{other}`\n\n{USAGE}"))),
+        None => Err(Usage(USAGE.to_string())),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Usage(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// Options shared by the commands.
+struct Cli {
+    scene: Scene,
+    output: Option<String>,
+    scene_file: Option<String>,
+}
+
+fn parse(args: &[String], allow_output: bool) -> Result<Cli, Usage> {
+    let mut scene = Scene::default();
+    let mut output = None;
+    let mut scene_file = None;
+    let mut sets: Vec<(String, String)> = Vec::new();
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        let mut value = |flag: &str| {
+            it.next()
+                .cloned()
+                .ok_or_else(|| Usage(format!("{flag} needs a value")))
+        };
+        match arg.as_str() {
+            "--formulation" => sets.push(("formulation".into(), value(arg)?)),
+            "--rtol" => sets.push(("rtol".into(), value(arg)?)),
+            "--atol" => sets.push(("atol".into(), value(arg)?)),
+            "--max-order" => sets.push(("max_order".into(), value(arg)?)),
+            "--fixed-step" => sets.push(("fixed_step".into(), value(arg)?)),
+            "--order" => sets.push(("fixed_order".into(), value(arg)?)),
+            "--no-guard" => sets.push(("stability_guard".into(), "false".into())),
+            "--set" => {
+                let kv = value(arg)?;
+                let (k, v) = kv
+                    .split_once('=')
+                    .ok_or_else(|| Usage(format!("--set expects NAME=VALUE, got `{kv}`")))?;
+                sets.push((k.trim().to_string(), v.trim().to_string()));
+            }
+            "-o" | "--output" if allow_output => output = Some(value(arg)?),
+            flag if flag.starts_with('-') => {
+                return Err(Usage(format!("unknown option `{flag}`\n\n{USAGE}")))
+            }
+            file if scene_file.is_none() => scene_file = Some(file.to_string()),
+            extra => return Err(Usage(format!("unexpected argument `{extra}`"))),
+        }
+    }
+    // The scene file first, then the command line over it.
+    if let Some(path) = &scene_file {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Usage(format!("cannot read scene file {path}: {e}")))?;
+        for (line, key, val) in scene_entries(&text).map_err(|e| Usage(format!("{path}: {e}")))? {
+            scene
+                .set(&key, &val)
+                .map_err(|e| Usage(format!("{path}:{line}: {e}")))?;
+        }
+    }
+    for (k, v) in &sets {
+        scene.set(k, v).map_err(Usage)?;
+    }
+    Ok(Cli {
+        scene,
+        output,
+        scene_file,
+    })
+}
+
+/// The `key = value` lines of a flat TOML scene file: numbers, booleans and "strings",
+/// `#` comments. Tables and arrays are not part of the scene format.
+fn scene_entries(text: &str) -> Result<Vec<(usize, String, String)>, String> {
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let n = i + 1;
+        let line = match raw.find('#') {
+            Some(pos) if !raw[..pos].contains('"') => &raw[..pos],
+            _ => raw,
+        }
+        .trim();
+        if line.is_empty() {
+            continue;
+        }
+        if line.starts_with('[') {
+            return Err(format!(
+                "line {n}: tables are not used: a scene is flat `key = value` lines"
+            ));
+        }
+        let (key, val) = line
+            .split_once('=')
+            .ok_or_else(|| format!("line {n}: expected `key = value`, got `{line}`"))?;
+        let val = val.trim();
+        let val = match val.strip_prefix('"') {
+            Some(rest) => rest
+                .strip_suffix('"')
+                .ok_or_else(|| format!("line {n}: unterminated string"))?,
+            None => val,
+        };
+        out.push((n, key.trim().to_string(), val.to_string()));
+    }
+    Ok(out)
+}
+
+fn cmd_simulate(args: &[String]) -> Result<(), Usage> {
+    let cli = parse(args, true)?;
+    if cli.scene_file.is_none() {
+        return Err(Usage(format!("simulate needs a scene file\n\n{USAGE}")));
+    }
+    let scene = cli.scene;
+    let sink: Box<dyn Write> = match &cli.output {
+        Some(path) => Box::new(
+            std::fs::File::create(path).map_err(|e| Usage(format!("cannot create {path}: {e}")))?,
+        ),
+        None => Box::new(io::stdout().lock()),
+    };
+    let mut out = BufWriter::new(sink);
+    let mut io_error = None;
+    let write_row = |out: &mut BufWriter<Box<dyn Write>>, o: &Outputs| {
+        let fields: Vec<String> = o.values().iter().map(|v| format!("{v:e}")).collect();
+        writeln!(out, "{}", fields.join(","))
+    };
+    writeln!(out, "{}", Outputs::COLUMNS.join(",")).map_err(|e| Usage(e.to_string()))?;
+    let mut rows = 0usize;
+    let mut max_drift: f64 = 0.0;
+    let (mut e_min, mut e_max) = (f64::INFINITY, f64::NEG_INFINITY);
+    let start = Instant::now();
+    let result = simulate(&scene, |o| {
+        rows += 1;
+        max_drift = max_drift.max(o.drift.abs());
+        e_min = e_min.min(o.energy);
+        e_max = e_max.max(o.energy);
+        if io_error.is_none() {
+            if let Err(e) = write_row(&mut out, o) {
+                io_error = Some(e);
+            }
+        }
+    });
+    let elapsed = start.elapsed();
+    if let Some(e) = io_error.or_else(|| out.flush().err()) {
+        return Err(Usage(format!("writing the CSV failed: {e}")));
+    }
+    let stats = result.map_err(|e| Usage(e.to_string()))?;
+    let s = scene.solver;
+    let mode = match s.fixed_step {
+        Some(f) => format!("fixed step h = {:e} s, order {}", f.h, f.order),
+        None => format!(
+            "rtol {:e}, atol {:e}, max order {}, guard {}",
+            s.rtol,
+            s.atol.unwrap_or(1e-3 * s.rtol),
+            s.max_order,
+            if s.stability_guard { "on" } else { "off" }
+        ),
+    };
+    eprintln!("beam-body: {} formulation, {mode}", scene.formulation);
+    eprintln!(
+        "  steps {}  rejected {} (error test {}, Newton {})  f-evals {} (+{} for Jacobians)",
+        stats.steps,
+        stats.rejected(),
+        stats.error_test_failures,
+        stats.newton_failures,
+        stats.rhs_evals,
+        stats.rhs_evals_jac
+    );
+    eprintln!(
+        "  Jacobians {}  LU factorizations {}  Newton iterations {}  order caps {}  restarts {}",
+        stats.jac_evals,
+        stats.lu_factorizations,
+        stats.newton_iters,
+        stats.order_caps,
+        stats.restarts
+    );
+    eprintln!(
+        "  rows {rows}  max |drift| {max_drift:.3e} m  energy range {:.6e} J  wall {:.3} ms",
+        e_max - e_min,
+        elapsed.as_secs_f64() * 1e3
+    );
+    Ok(())
+}
+
+fn cmd_modes(args: &[String]) -> Result<(), Usage> {
+    let cli = parse(args, false)?;
+    let model = BeamBody::new(cli.scene.params).map_err(|e| Usage(e.to_string()))?;
+    println!("phi [rad]  v1_eq [m]      theta1_eq [rad]  T1 [s]     T2 [s]");
+    for (label, phi) in [("0", 0.0), ("pi/2", PI / 2.0), ("pi", PI)] {
+        let m = model.modes(phi);
+        let fmt = |p: Option<f64>| p.map_or("unstable".to_string(), |t| format!("{t:.6}"));
+        let [t1, t2] = m.periods();
+        println!(
+            "{label:<9}  {:<+13.6e}  {:<+15.6e}  {:<9}  {}",
+            m.equilibrium.0,
+            m.equilibrium.1,
+            fmt(t1),
+            fmt(t2)
+        );
+    }
+    Ok(())
+}
+
+fn cmd_residual(args: &[String]) -> Result<(), Usage> {
+    let cli = parse(args, false)?;
+    let model = BeamBody::new(cli.scene.params).map_err(|e| Usage(e.to_string()))?;
+    let form = cli.scene.formulation;
+    let width = if form.is_dae() { 12 } else { 9 };
+    let stdout = io::stdout();
+    let mut out = BufWriter::new(stdout.lock());
+    for (i, line) in io::stdin().lock().lines().enumerate() {
+        let line = line.map_err(|e| Usage(e.to_string()))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .map_err(|e| Usage(format!("stdin line {}: {e}", i + 1)))?;
+        if v.len() != width {
+            return Err(Usage(format!(
+                "stdin line {}: {} numbers, the {form} formulation needs {width}",
+                i + 1,
+                v.len()
+            )));
+        }
+        let phi = Phi {
+            phi: v[0],
+            dphi: v[1],
+            ddphi: v[2],
+        };
+        let row: Vec<f64> = if form.is_dae() {
+            let (x, xd, xdd) = (
+                Vector3::new(v[3], v[4], v[5]),
+                Vector3::new(v[6], v[7], v[8]),
+                Vector3::new(v[9], v[10], v[11]),
+            );
+            let (a, b) = model.dae(&phi, x, xd);
+            let acc = model.dae_accel(&phi, x, xd);
+            (a * xdd - b).iter().chain(acc.iter()).copied().collect()
+        } else {
+            let linear = form == Formulation::Linear;
+            let (q, qd, qdd) = (
+                Vector2::new(v[3], v[4]),
+                Vector2::new(v[5], v[6]),
+                Vector2::new(v[7], v[8]),
+            );
+            let (m, f) = if linear {
+                model.linear(&phi, q, qd)
+            } else {
+                model.reduced(&phi, q, qd)
+            };
+            let acc = model.two_dof_accel(linear, &phi, q, qd);
+            (m * qdd - f).iter().chain(acc.iter()).copied().collect()
+        };
+        let text: Vec<String> = row.iter().map(|x| format!("{x:e}")).collect();
+        writeln!(out, "{}", text.join(" ")).map_err(|e| Usage(e.to_string()))?;
+    }
+    out.flush().map_err(|e| Usage(e.to_string()))
+}
