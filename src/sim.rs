@@ -39,13 +39,7 @@ pub struct SolverOptions {
 
 impl Default for SolverOptions {
     fn default() -> Self {
-        Self {
-            rtol: 1e-6,
-            atol: None,
-            max_order: 5,
-            fixed_step: None,
-            stability_guard: true,
-        }
+        Self { rtol: 1e-6, atol: None, max_order: 5, fixed_step: None, stability_guard: true }
     }
 }
 
@@ -126,9 +120,7 @@ impl Scene {
             };
             return Ok(());
         }
-        let value: f64 = text
-            .parse()
-            .map_err(|_| format!("`{name}` = {text}: not a number"))?;
+        let value: f64 = text.parse().map_err(|_| format!("`{name}` = {text}: not a number"))?;
         if self.params.set(name, value).map_err(|e| e.to_string())? {
             return Ok(());
         }
@@ -136,9 +128,7 @@ impl Scene {
             if ok {
                 Ok(())
             } else {
-                Err(format!(
-                    "`{name}` = {text} is out of range: must be {allowed}"
-                ))
+                Err(format!("`{name}` = {text} is out of range: must be {allowed}"))
             }
         };
         let positive = value.is_finite() && value > 0.0;
@@ -168,10 +158,7 @@ impl Scene {
             }),
             "fixed_order" => range(order, "an integer in 1..=5").map(|_| {
                 let h = self.solver.fixed_step.map_or(f64::NAN, |f| f.h);
-                self.solver.fixed_step = Some(FixedStep {
-                    h,
-                    order: value as usize,
-                });
+                self.solver.fixed_step = Some(FixedStep { h, order: value as usize });
             }),
             _ => Err(format!(
                 "unknown name `{name}`: must be one of {}, {}",
@@ -188,13 +175,7 @@ impl Scene {
         let n = (ratio + 1e-9).floor() as u64;
         let exact = (ratio - n as f64).abs() <= 1e-9 * ratio.max(1.0);
         let last = if exact { n } else { n + 1 };
-        (0..=last).map(move |k| {
-            if k == last {
-                self.t_end
-            } else {
-                k as f64 * self.dt_out
-            }
-        })
+        (0..=last).map(move |k| if k == last { self.t_end } else { k as f64 * self.dt_out })
     }
 
     /// Checks everything that does not need the integrator.
@@ -250,11 +231,7 @@ pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Stats, 
         Formulation::Reduced | Formulation::Linear => {
             let linear = scene.formulation == Formulation::Linear;
             let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            let make = |phi| TwoDofSystem {
-                model: &model,
-                phi,
-                linear,
-            };
+            let make = |phi| TwoDofSystem { model: &model, phi, linear };
             run(scene, y0, make, |s, t, y| s.outputs(t, y), &mut sink)
         }
         Formulation::Dae | Formulation::DaeStabilized => {
@@ -269,11 +246,7 @@ pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Stats, 
                 init.dtheta1,
                 -p * init.dv1 - l * q * init.dtheta1,
             ]);
-            let make = |phi| DaeSystem {
-                model: &model,
-                phi,
-                stabilized,
-            };
+            let make = |phi| DaeSystem { model: &model, phi, stabilized };
             run(scene, y0, make, |s, t, y| s.outputs(t, y), &mut sink)
         }
     }
@@ -324,21 +297,13 @@ mod tests {
 
     #[test]
     fn output_grid_is_exact_and_ends_at_t_end() {
-        let scene = Scene {
-            t_end: 10.2,
-            dt_out: 0.0085,
-            ..Scene::default()
-        };
+        let scene = Scene { t_end: 10.2, dt_out: 0.0085, ..Scene::default() };
         let times: Vec<f64> = scene.output_times().collect();
         assert_eq!(times.len(), 1201);
         assert_eq!(times[0], 0.0);
         assert_eq!(times[7], 7.0 * 0.0085);
         assert_eq!(*times.last().unwrap(), 10.2);
-        let uneven = Scene {
-            t_end: 1.05,
-            dt_out: 0.1,
-            ..Scene::default()
-        };
+        let uneven = Scene { t_end: 1.05, dt_out: 0.1, ..Scene::default() };
         let times: Vec<f64> = uneven.output_times().collect();
         assert_eq!(times.len(), 12);
         assert_eq!(times[10], 1.0);

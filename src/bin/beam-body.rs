@@ -82,11 +82,8 @@ fn parse(args: &[String], allow_output: bool) -> Result<Cli, Usage> {
     let mut sets: Vec<(String, String)> = Vec::new();
     let mut it = args.iter();
     while let Some(arg) = it.next() {
-        let mut value = |flag: &str| {
-            it.next()
-                .cloned()
-                .ok_or_else(|| Usage(format!("{flag} needs a value")))
-        };
+        let mut value =
+            |flag: &str| it.next().cloned().ok_or_else(|| Usage(format!("{flag} needs a value")));
         match arg.as_str() {
             "--formulation" => sets.push(("formulation".into(), value(arg)?)),
             "--rtol" => sets.push(("rtol".into(), value(arg)?)),
@@ -115,19 +112,13 @@ fn parse(args: &[String], allow_output: bool) -> Result<Cli, Usage> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Usage(format!("cannot read scene file {path}: {e}")))?;
         for (line, key, val) in scene_entries(&text).map_err(|e| Usage(format!("{path}: {e}")))? {
-            scene
-                .set(&key, &val)
-                .map_err(|e| Usage(format!("{path}:{line}: {e}")))?;
+            scene.set(&key, &val).map_err(|e| Usage(format!("{path}:{line}: {e}")))?;
         }
     }
     for (k, v) in &sets {
         scene.set(k, v).map_err(Usage)?;
     }
-    Ok(Cli {
-        scene,
-        output,
-        scene_file,
-    })
+    Ok(Cli { scene, output, scene_file })
 }
 
 /// The `key = value` lines of a flat TOML scene file: numbers, booleans and "strings",
@@ -154,9 +145,9 @@ fn scene_entries(text: &str) -> Result<Vec<(usize, String, String)>, String> {
             .ok_or_else(|| format!("line {n}: expected `key = value`, got `{line}`"))?;
         let val = val.trim();
         let val = match val.strip_prefix('"') {
-            Some(rest) => rest
-                .strip_suffix('"')
-                .ok_or_else(|| format!("line {n}: unterminated string"))?,
+            Some(rest) => {
+                rest.strip_suffix('"').ok_or_else(|| format!("line {n}: unterminated string"))?
+            }
             None => val,
         };
         out.push((n, key.trim().to_string(), val.to_string()));
@@ -283,11 +274,7 @@ fn cmd_residual(args: &[String]) -> Result<(), Usage> {
                 v.len()
             )));
         }
-        let phi = Phi {
-            phi: v[0],
-            dphi: v[1],
-            ddphi: v[2],
-        };
+        let phi = Phi { phi: v[0], dphi: v[1], ddphi: v[2] };
         let row: Vec<f64> = if form.is_dae() {
             let (x, xd, xdd) = (
                 Vector3::new(v[3], v[4], v[5]),
@@ -299,16 +286,10 @@ fn cmd_residual(args: &[String]) -> Result<(), Usage> {
             (a * xdd - b).iter().chain(acc.iter()).copied().collect()
         } else {
             let linear = form == Formulation::Linear;
-            let (q, qd, qdd) = (
-                Vector2::new(v[3], v[4]),
-                Vector2::new(v[5], v[6]),
-                Vector2::new(v[7], v[8]),
-            );
-            let (m, f) = if linear {
-                model.linear(&phi, q, qd)
-            } else {
-                model.reduced(&phi, q, qd)
-            };
+            let (q, qd, qdd) =
+                (Vector2::new(v[3], v[4]), Vector2::new(v[5], v[6]), Vector2::new(v[7], v[8]));
+            let (m, f) =
+                if linear { model.linear(&phi, q, qd) } else { model.reduced(&phi, q, qd) };
             let acc = model.two_dof_accel(linear, &phi, q, qd);
             (m * qdd - f).iter().chain(acc.iter()).copied().collect()
         };

@@ -54,8 +54,7 @@ pub struct Modes {
 impl Modes {
     /// Periods 2π/ω [s]; `None` for a non-oscillatory (unstable) mode.
     pub fn periods(&self) -> [Option<f64>; 2] {
-        self.omega2
-            .map(|w2| (w2 > 0.0).then(|| 2.0 * PI / w2.sqrt()))
+        self.omega2.map(|w2| (w2 > 0.0).then(|| 2.0 * PI / w2.sqrt()))
     }
 }
 
@@ -69,15 +68,7 @@ impl BeamBody {
     /// The model, after checking the parameter ranges.
     pub fn new(params: Params) -> Result<Self, ParamError> {
         params.validate()?;
-        let Params {
-            l,
-            ei,
-            m,
-            m2,
-            j_c,
-            r,
-            ..
-        } = params;
+        let Params { l, ei, m, m2, j_c, r, .. } = params;
         let mb = Matrix2::new(
             13.0 * m * l / 35.0,
             -11.0 * m * l * l / 210.0,
@@ -90,20 +81,12 @@ impl BeamBody {
             -6.0 * ei / (l * l),
             4.0 * ei / l,
         );
-        Ok(Self {
-            params,
-            mb,
-            k,
-            j2: j_c + m2 * r * r,
-        })
+        Ok(Self { params, mb, k, j2: j_c + m2 * r * r })
     }
 
     /// Checks that the mass matrix of (15) is positive definite at the given start.
     pub fn check_start(&self, phi: f64, v1: f64, theta1: f64) -> Result<(), ParamError> {
-        let at = Phi {
-            phi,
-            ..Phi::default()
-        };
+        let at = Phi { phi, ..Phi::default() };
         let (m, _) = self.reduced(&at, Vector2::new(v1, theta1), Vector2::zeros());
         let scale = m[(0, 0)] * m[(1, 1)];
         if m[(0, 0)] > 0.0 && m.determinant() > 1e-12 * scale {
@@ -134,9 +117,7 @@ impl BeamBody {
         q: Vector2<f64>,
         qd: Vector2<f64>,
     ) -> (Matrix2<f64>, Vector2<f64>) {
-        let Params {
-            l, m2, j_c, r, g, ..
-        } = self.params;
+        let Params { l, m2, j_c, r, g, .. } = self.params;
         let (s, c, dth) = body_angle(phi, q[1], qd[1]);
         let jc = self.jc(q, s, c);
         let w = u1_accel_bias(l, qd[0], qd[1]);
@@ -160,18 +141,14 @@ impl BeamBody {
         q: Vector2<f64>,
         qd: Vector2<f64>,
     ) -> (Matrix2<f64>, Vector2<f64>) {
-        let Params {
-            l, m2, j_c, r, g, ..
-        } = self.params;
+        let Params { l, m2, j_c, r, g, .. } = self.params;
         let (s0, c0) = phi.phi.sin_cos();
         let (w, ddphi) = (phi.dphi, phi.ddphi);
         let (v1, th, dth) = (q[0], q[1], qd[1]);
         let jc0 = Matrix2::new(0.0, -r * s0, 1.0, r * c0);
         // (C̈ − g e_x) at q = q̇ = q̈ = 0 …
-        let a0 = Vector2::new(
-            -r * c0 * w * w - r * s0 * ddphi - g,
-            -r * s0 * w * w + r * c0 * ddphi,
-        );
+        let a0 =
+            Vector2::new(-r * c0 * w * w - r * s0 * ddphi - g, -r * s0 * w * w + r * c0 * ddphi);
         // … its first-order change through θ = ϑ1 + φ and θ̇ = ϑ̇1 + φ' (w = O(q̇²) drops) …
         let da = Vector2::new(
             r * s0 * w * w * th - 2.0 * r * c0 * w * dth - r * c0 * ddphi * th,
@@ -235,13 +212,8 @@ impl BeamBody {
         q: Vector2<f64>,
         qd: Vector2<f64>,
     ) -> Vector2<f64> {
-        let (m, f) = if linear {
-            self.linear(phi, q, qd)
-        } else {
-            self.reduced(phi, q, qd)
-        };
-        m.try_inverse()
-            .map_or(Vector2::repeat(f64::NAN), |inv| inv * f)
+        let (m, f) = if linear { self.linear(phi, q, qd) } else { self.reduced(phi, q, qd) };
+        m.try_inverse().map_or(Vector2::repeat(f64::NAN), |inv| inv * f)
     }
 
     /// Accelerations (v̈1, ϑ̈1, ü2) of the DAE. NaN if A is singular.
@@ -286,10 +258,7 @@ impl BeamBody {
     /// Natural frequencies of (15) linearised about its static equilibrium at a fixed φ.
     /// The equilibrium solves K q = M2 g J_C(q)ᵀ e_x by Newton's method.
     pub fn modes(&self, phi_fixed: f64) -> Modes {
-        let phi = Phi {
-            phi: phi_fixed,
-            ..Phi::default()
-        };
+        let phi = Phi { phi: phi_fixed, ..Phi::default() };
         let force = |q: Vector2<f64>| self.reduced(&phi, q, Vector2::zeros()).1;
         let stiffness = |q: Vector2<f64>| {
             // Tangent stiffness −∂F/∂q by central differences.
@@ -328,11 +297,7 @@ impl BeamBody {
             }
             None => [f64::NAN; 2],
         };
-        Modes {
-            phi: phi_fixed,
-            equilibrium: (q[0], q[1]),
-            omega2,
-        }
+        Modes { phi: phi_fixed, equilibrium: (q[0], q[1]), omega2 }
     }
 }
 
@@ -346,11 +311,7 @@ mod tests {
     }
 
     fn phi() -> Phi {
-        Phi {
-            phi: 1.1,
-            dphi: -2.3,
-            ddphi: 7.0,
-        }
+        Phi { phi: 1.1, dphi: -2.3, ddphi: 7.0 }
     }
 
     /// Substituting ü2 from the twice-differentiated constraint into the DAE's beam rows
@@ -394,20 +355,13 @@ mod tests {
                 Vector2::new(1.0, 2.0) * e,
                 Vector2::new(-4.0, 3.0) * e,
             );
-            let (m, f) = if lin {
-                bb.linear(&phi(), q, qd)
-            } else {
-                bb.reduced(&phi(), q, qd)
-            };
+            let (m, f) = if lin { bb.linear(&phi(), q, qd) } else { bb.reduced(&phi(), q, qd) };
             m * qdd - f
         };
         let d1 = (residual(true, 1e-2) - residual(false, 1e-2)).norm();
         let d2 = (residual(true, 1e-3) - residual(false, 1e-3)).norm();
         let ratio = d1 / d2;
-        assert!(
-            (ratio - 100.0).abs() < 5.0,
-            "difference should scale as ε²: ratio {ratio}"
-        );
+        assert!((ratio - 100.0).abs() < 5.0, "difference should scale as ε²: ratio {ratio}");
         assert!((residual(true, 0.0) - residual(false, 0.0)).norm() < 1e-12);
     }
 
@@ -422,11 +376,7 @@ mod tests {
 
     #[test]
     fn massless_point_body_is_rejected_at_phi_zero() {
-        let p = Params {
-            m: 0.0,
-            j_c: 0.0,
-            ..Params::default()
-        };
+        let p = Params { m: 0.0, j_c: 0.0, ..Params::default() };
         let bb = BeamBody::new(p).unwrap();
         let e = bb.check_start(0.0, 0.0, 0.0).unwrap_err();
         assert!(e.to_string().contains("positive definite"), "{e}");

@@ -17,12 +17,8 @@ pub enum Formulation {
 }
 
 impl Formulation {
-    pub const ALL: [Formulation; 4] = [
-        Formulation::Reduced,
-        Formulation::Dae,
-        Formulation::DaeStabilized,
-        Formulation::Linear,
-    ];
+    pub const ALL: [Formulation; 4] =
+        [Formulation::Reduced, Formulation::Dae, Formulation::DaeStabilized, Formulation::Linear];
 
     /// The name used on the command line and in scene files.
     pub fn name(self) -> &'static str {

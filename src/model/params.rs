@@ -21,15 +21,7 @@ pub struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Self {
-            l: 2.5,
-            ei: 1000.0,
-            m: 2.0,
-            m2: 12.0,
-            j_c: 1.0,
-            r: 0.5,
-            g: 10.0,
-        }
+        Self { l: 2.5, ei: 1000.0, m: 2.0, m2: 12.0, j_c: 1.0, r: 0.5, g: 10.0 }
     }
 }
 
@@ -68,11 +60,7 @@ pub(crate) fn check(name: &str, value: f64, allowed: &'static str) -> Result<(),
     if ok {
         Ok(())
     } else {
-        Err(ParamError {
-            name: name.to_string(),
-            value,
-            allowed,
-        })
+        Err(ParamError { name: name.to_string(), value, allowed })
     }
 }
 
@@ -128,9 +116,6 @@ mod tests {
         assert!(p.set("l", f64::NAN).is_err());
         assert!(p.set("g", -10.0).is_ok());
         assert_eq!(p.set("nope", 1.0), Ok(false));
-        assert_eq!(
-            p.ei, 2000.0,
-            "a rejected value leaves the parameter unchanged"
-        );
+        assert_eq!(p.ei, 2000.0, "a rejected value leaves the parameter unchanged");
     }
 }

@@ -25,11 +25,7 @@ pub struct PaperLaw {
 
 impl Default for PaperLaw {
     fn default() -> Self {
-        Self {
-            phi0: 0.0,
-            phi_end: PI,
-            t_rot: 0.85,
-        }
+        Self { phi0: 0.0, phi_end: PI, t_rot: 0.85 }
     }
 }
 
@@ -96,11 +92,7 @@ impl PhiPiece {
                     ddphi: 0.5 * law.phi_end * w * w * c,
                 }
             }
-            PhiPiece::Hold(phi) => Phi {
-                phi,
-                dphi: 0.0,
-                ddphi: 0.0,
-            },
+            PhiPiece::Hold(phi) => Phi { phi, dphi: 0.0, ddphi: 0.0 },
             PhiPiece::Taylor(sig) => {
                 let d = t - sig.t0;
                 let a = sig.at_t0;
@@ -124,14 +116,7 @@ mod tests {
         assert_eq!(law.eval(0.0).phi, 0.0);
         assert!((law.eval(law.t_rot).phi - PI).abs() < 1e-15);
         assert!(law.eval(law.t_rot).dphi.abs() < 1e-14);
-        assert_eq!(
-            law.eval(5.0),
-            Phi {
-                phi: PI,
-                dphi: 0.0,
-                ddphi: 0.0
-            }
-        );
+        assert_eq!(law.eval(5.0), Phi { phi: PI, dphi: 0.0, ddphi: 0.0 });
         // Central differences of φ and φ' agree with the analytic φ' and φ''.
         let h = 1e-5;
         for &t in &[0.1, 0.3, 0.6, 0.8] {
@@ -158,11 +143,7 @@ mod tests {
     fn taylor_signal_is_quadratic() {
         let s = PhiPiece::Taylor(TaylorSignal {
             t0: 1.0,
-            at_t0: Phi {
-                phi: 0.5,
-                dphi: 2.0,
-                ddphi: -4.0,
-            },
+            at_t0: Phi { phi: 0.5, dphi: 2.0, ddphi: -4.0 },
         });
         let p = s.eval(1.5);
         assert!((p.phi - (0.5 + 1.0 - 0.5)).abs() < 1e-15);

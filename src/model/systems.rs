@@ -100,9 +100,7 @@ impl TwoDofSystem<'_> {
 impl OdeSystem<4> for TwoDofSystem<'_> {
     fn rhs(&self, t: f64, y: &Vector4<f64>) -> Vector4<f64> {
         let (q, qd) = Self::split(y);
-        let acc = self
-            .model
-            .two_dof_accel(self.linear, &self.phi.eval(t), q, qd);
+        let acc = self.model.two_dof_accel(self.linear, &self.phi.eval(t), q, qd);
         Vector4::new(qd[0], qd[1], acc[0], acc[1])
     }
 }
@@ -118,10 +116,7 @@ pub struct DaeSystem<'a> {
 
 impl DaeSystem<'_> {
     fn split(y: &Vector6<f64>) -> (Vector3<f64>, Vector3<f64>) {
-        (
-            Vector3::new(y[0], y[1], y[2]),
-            Vector3::new(y[3], y[4], y[5]),
-        )
+        (Vector3::new(y[0], y[1], y[2]), Vector3::new(y[3], y[4], y[5]))
     }
 
     /// The consistent state with the same v1, ϑ1, v̇1, ϑ̇1.
@@ -137,11 +132,7 @@ impl DaeSystem<'_> {
     /// The outputs at (t, y), reactions from (19) with ẍ_h = ü2; projected first when
     /// stabilised, so the dense output is consistent too.
     pub fn outputs(&self, t: f64, y: &Vector6<f64>) -> Outputs {
-        let y = if self.stabilized {
-            self.consistent(y)
-        } else {
-            *y
-        };
+        let y = if self.stabilized { self.consistent(y) } else { *y };
         let phi = self.phi.eval(t);
         let (x, xd) = Self::split(&y);
         let acc = self.model.dae_accel(&phi, x, xd);
@@ -155,9 +146,7 @@ impl DaeSystem<'_> {
             dtheta1: xd[1],
             du2: xd[2],
             phi,
-            reactions: self
-                .model
-                .reactions(&phi, x[1], xd[1], acc[1], acc[0], acc[2]),
+            reactions: self.model.reactions(&phi, x[1], xd[1], acc[1], acc[0], acc[2]),
             energy: self.model.energy(&phi, q, qd, x[2], xd[2]),
             drift: x[2] - u1(self.model.params.l, x[0], x[1]),
         }

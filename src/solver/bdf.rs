@@ -204,6 +204,51 @@ impl<const N: usize> Bdf<N> {
         Ok(())
     }
 
+    /// Starts from known derivatives `derivatives[j] = y^(j)(t)`, j = 0..=q, at order
+    /// q = `derivatives.len() − 1` and step `h`, as if constant steps `h` had been taken.
+    /// Without it a run starts at order 1, whose first steps limit a fixed-step run of order
+    /// q ≥ 3 to second-order accuracy; the convergence-order tests need it.
+    pub fn set_history(
+        &mut self,
+        h: f64,
+        derivatives: &[SVector<f64, N>],
+    ) -> Result<(), SolverError> {
+        let q = derivatives.len().saturating_sub(1);
+        if !(1..=self.max_order()).contains(&q) {
+            let allowed = "y, y' and up to max_order higher derivatives";
+            return Err(SolverError::InvalidConfig { field: "history", value: q as f64, allowed });
+        }
+        if !(h.is_finite() && h > 0.0) {
+            return Err(SolverError::InvalidConfig {
+                field: "h",
+                value: h,
+                allowed: "positive and finite",
+            });
+        }
+        if !derivatives.iter().all(|d| d.iter().all(|v| v.is_finite())) {
+            return Err(SolverError::NonFiniteState { t: self.t });
+        }
+        let mut factor = 1.0;
+        for (j, d) in derivatives.iter().enumerate() {
+            if j > 0 {
+                factor *= h / j as f64;
+            }
+            self.zn[j] = d * factor;
+        }
+        self.q = q;
+        self.q_next = q;
+        self.qwait = q + 1;
+        self.tau = [h; NCOL + 1];
+        self.h = h;
+        self.hscale = h;
+        self.h_next = h;
+        self.hu = 0.0;
+        self.lu = None;
+        self.started = true;
+        self.update_weights();
+        Ok(())
+    }
+
     /// Time of the last accepted step.
     pub fn t(&self) -> f64 {
         self.t
@@ -255,31 +300,25 @@ impl<const N: usize> Bdf<N> {
 
     /// Steps until `t ≥ tout`, never past `tstop` (use `tstop = tout` to end exactly there;
     /// `f64::INFINITY` for no stop). Then [`interpolate`](Self::interpolate) gives y(tout).
+    /// A `tout` already inside the last step takes no step.
     pub fn advance<S: OdeSystem<N>>(
         &mut self,
         sys: &S,
         tout: f64,
         tstop: f64,
     ) -> Result<(), SolverError> {
-        if tout < self.t - 100.0 * f64::EPSILON * self.t.abs() {
-            return Err(SolverError::TimeBehind {
-                t: self.t,
-                target: tout,
-            });
+        // A target behind t is fine while it lies in the last step (dense output serves it).
+        let lo = self.t - self.hu;
+        if tout < lo - 100.0 * f64::EPSILON * (lo.abs() + self.hu) {
+            return Err(SolverError::TimeBehind { t: self.t, target: tout });
         }
         let mut taken = 0u64;
         while self.t < tout {
             if taken == self.cfg.max_steps {
-                return Err(SolverError::TooManySteps {
-                    t: self.t,
-                    max_steps: taken,
-                });
+                return Err(SolverError::TooManySteps { t: self.t, max_steps: taken });
             }
             if self.step(sys, tstop)? == StepOutcome::ReachedStop && self.t < tout {
-                return Err(SolverError::TimeBehind {
-                    t: tstop,
-                    target: tout,
-                });
+                return Err(SolverError::TimeBehind { t: tstop, target: tout });
             }
             taken += 1;
         }
@@ -294,10 +333,7 @@ impl<const N: usize> Bdf<N> {
         tstop: f64,
     ) -> Result<StepOutcome, SolverError> {
         if tstop <= self.t {
-            return Err(SolverError::TimeBehind {
-                t: self.t,
-                target: tstop,
-            });
+            return Err(SolverError::TimeBehind { t: self.t, target: tstop });
         }
         if !self.started {
             self.start(sys, tstop)?;
@@ -324,10 +360,9 @@ impl<const N: usize> Bdf<N> {
                 {
                     return Err(match why {
                         NewtonFail::NonFinite => SolverError::NonFiniteRhs { t: self.t },
-                        NewtonFail::Singular => SolverError::SingularMatrix {
-                            t: self.t,
-                            h: self.h,
-                        },
+                        NewtonFail::Singular => {
+                            SolverError::SingularMatrix { t: self.t, h: self.h }
+                        }
                         NewtonFail::Diverged => SolverError::NewtonFailures {
                             t: self.t,
                             h: self.h,
@@ -442,16 +477,8 @@ impl<const N: usize> Bdf<N> {
         probe = probe.min(0.01 * span).max(1e-12 * (1.0 + self.t.abs()));
         let y1 = self.zn[0] + f0 * probe;
         let f1 = self.eval_rhs(sys, self.t + probe, &y1);
-        let d2 = if f1.iter().all(|v| v.is_finite()) {
-            self.wrms(&(f1 - f0)) / probe
-        } else {
-            0.0
-        };
-        let h = if d2 > 1e-300 {
-            (0.5 / d2).sqrt()
-        } else {
-            100.0 * probe
-        };
+        let d2 = if f1.iter().all(|v| v.is_finite()) { self.wrms(&(f1 - f0)) / probe } else { 0.0 };
+        let h = if d2 > 1e-300 { (0.5 / d2).sqrt() } else { 100.0 * probe };
         h.min(100.0 * probe.max(1e-6)).min(0.1 * span)
     }
 
@@ -492,10 +519,7 @@ impl<const N: usize> Bdf<N> {
     fn check_step_size(&self) -> Result<(), SolverError> {
         let resolution = 4.0 * f64::EPSILON * self.t.abs().max(self.h.abs());
         if self.h.abs() <= resolution || self.h.abs() < self.cfg.h_min * (1.0 - 1e-12) {
-            return Err(SolverError::StepSizeTooSmall {
-                t: self.t,
-                h: self.h,
-            });
+            return Err(SolverError::StepSizeTooSmall { t: self.t, h: self.h });
         }
         Ok(())
     }
@@ -557,11 +581,7 @@ impl<const N: usize> Bdf<N> {
         mut conv_fail: ConvFail,
     ) -> Result<(), NewtonFail> {
         loop {
-            let gamma_ratio = if self.lu.is_some() {
-                self.gamma / self.gamma_lu
-            } else {
-                1.0
-            };
+            let gamma_ratio = if self.lu.is_some() { self.gamma / self.gamma_lu } else { 1.0 };
             let needs_setup = self.lu.is_none()
                 || conv_fail != ConvFail::None
                 || self.stats.steps >= self.steps_at_lu + REFACTOR_STEPS
@@ -591,11 +611,7 @@ impl<const N: usize> Bdf<N> {
         let lu = self.lu.as_ref().ok_or(NewtonFail::Singular)?;
         let gamma_ratio = self.gamma / self.gamma_lu;
         // A stale γ in the LU is corrected by scaling the update (CVODE cvLsSolve for BDF).
-        let scale = if gamma_ratio != 1.0 {
-            2.0 / (1.0 + gamma_ratio)
-        } else {
-            1.0
-        };
+        let scale = if gamma_ratio != 1.0 { 2.0 / (1.0 + gamma_ratio) } else { 1.0 };
         let inv_l1 = 1.0 / self.coeffs.l[1];
         let tol = NEWTON_COEF / self.coeffs.tq[2];
         let mut acor = SVector::<f64, N>::zeros();
@@ -771,16 +787,35 @@ impl<const N: usize> Bdf<N> {
         } else {
             self.qwait = self.qwait.max(2);
         }
-        let h_next = self.h * eta;
-        if self.cfg.stability_guard {
-            let safe = self.guard.max_safe_order(q_next, h_next);
-            if safe < q_next {
-                self.stats.order_caps += 1;
-                q_next = safe;
-            }
+        if self.cfg.stability_guard && self.guard.max_safe_order(q_next, self.h * eta) < q_next {
+            // A weakly damped mode of J would sit in the unstable band of that order: take
+            // instead the stable order whose own error estimate allows the largest step.
+            self.stats.order_caps += 1;
+            (q_next, eta) = self.best_stable_order(q_next, dsm);
         }
         self.q_next = q_next;
-        self.h_next = h_next;
+        self.h_next = self.h * eta;
+    }
+
+    /// The order k ≤ `limit` (and ≤ q) and step ratio η with the largest step among those the
+    /// stability guard accepts. Order q uses its error estimate `dsm`; a lower order k uses
+    /// the local error of BDF_k at constant step, k!·z_{k+1} (error constant 1/(k+1) times
+    /// h^{k+1}y^{(k+1)}). BDF1 and BDF2 are always stable, so there is always a choice.
+    fn best_stable_order(&self, limit: usize, dsm: f64) -> (usize, f64) {
+        let mut best = (1, 0.0);
+        let mut factorial = 1.0;
+        for k in 1..=limit.min(self.q) {
+            factorial *= k as f64;
+            let err = if k == self.q { dsm } else { factorial * self.wrms(&self.zn[k + 1]) };
+            let raw = 1.0 / ((BIAS_SAME * err).powf(1.0 / (k + 1) as f64) + ADDON);
+            // Grow only past the usual threshold; shrink at once if the estimate asks for it.
+            let mut eta = if raw < ETA_THRESHOLD { raw.min(1.0) } else { raw.min(self.eta_max) };
+            eta /= (self.h.abs() * eta / self.cfg.h_max).max(1.0);
+            if eta > best.1 && self.guard.max_safe_order(k, self.h * eta) == k {
+                best = (k, eta);
+            }
+        }
+        best
     }
 
     // ----- helpers ------------------------------------------------------------------------
@@ -802,11 +837,7 @@ impl<const N: usize> Bdf<N> {
 
     /// Weighted root-mean-square norm with the current error weights.
     fn wrms(&self, v: &SVector<f64, N>) -> f64 {
-        let s: f64 = v
-            .iter()
-            .zip(self.ewt.iter())
-            .map(|(a, w)| (a * w) * (a * w))
-            .sum();
+        let s: f64 = v.iter().zip(self.ewt.iter()).map(|(a, w)| (a * w) * (a * w)).sum();
         (s / N as f64).sqrt()
     }
 }
@@ -876,10 +907,8 @@ mod tests {
 
     #[test]
     fn fixed_step_mode_keeps_the_step() {
-        let cfg = BdfConfig {
-            fixed_step: Some(FixedStep { h: 0.01, order: 3 }),
-            ..BdfConfig::new(1e-6)
-        };
+        let cfg =
+            BdfConfig { fixed_step: Some(FixedStep { h: 0.01, order: 3 }), ..BdfConfig::new(1e-6) };
         let mut s = Bdf::new(cfg, 0.0, Vector1::new(1.0)).unwrap();
         s.advance(&Decay, 1.0, 1.0).unwrap();
         assert_eq!(s.stats().steps, 100);
@@ -890,10 +919,7 @@ mod tests {
 
     #[test]
     fn bad_settings_name_the_field() {
-        let cfg = BdfConfig {
-            rtol: 0.0,
-            ..BdfConfig::<1>::new(1e-6)
-        };
+        let cfg = BdfConfig { rtol: 0.0, ..BdfConfig::<1>::new(1e-6) };
         let e = Bdf::new(cfg, 0.0, Vector1::new(1.0)).unwrap_err();
         assert!(e.to_string().contains("rtol"), "{e}");
         let e = Bdf::new(BdfConfig::new(1e-6), 0.0, Vector1::new(f64::NAN)).unwrap_err();

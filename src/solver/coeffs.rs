@@ -70,11 +70,7 @@ pub(crate) fn bdf_coeffs(
     let sum_inv_xi_head: f64 = xi[1..q].iter().map(|x| 1.0 / x).sum();
     let alpha0_hat = -sum_inv_xi_head - 1.0 / xi[q];
     // 1/ξ* is chosen so that l_1 = −α0.
-    let inv_xi_star = if q == 1 {
-        1.0
-    } else {
-        -sum_inv_xi_head - alpha0
-    };
+    let inv_xi_star = if q == 1 { 1.0 } else { -sum_inv_xi_head - alpha0 };
     for i in (1..=q).rev() {
         l[i] += l[i - 1] * inv_xi_star;
     }
@@ -196,10 +192,7 @@ mod tests {
             let want: f64 = (1..=q).map(|j| 1.0 / j as f64).sum();
             assert!((c.l[1] - want).abs() < 1e-14, "q = {q}");
             assert_eq!(c.l[0], 1.0);
-            assert!(c.tq[1..=5]
-                .iter()
-                .enumerate()
-                .all(|(i, t)| i == 3 || t.is_finite()));
+            assert!(c.tq[1..=5].iter().enumerate().all(|(i, t)| i == 3 || t.is_finite()));
         }
     }
 

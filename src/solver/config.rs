@@ -55,11 +55,7 @@ impl<const N: usize> BdfConfig<N> {
     /// Checks every field against its allowed range.
     pub fn validate(&self) -> Result<(), SolverError> {
         let bad = |field: &'static str, value: f64, allowed: &'static str| {
-            Err(SolverError::InvalidConfig {
-                field,
-                value,
-                allowed,
-            })
+            Err(SolverError::InvalidConfig { field, value, allowed })
         };
         if !(self.rtol.is_finite() && (1e-14..=1.0).contains(&self.rtol)) {
             return bad("rtol", self.rtol, "a number in [1e-14, 1]");

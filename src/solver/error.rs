@@ -4,11 +4,7 @@ use std::fmt;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolverError {
     /// A configuration field is outside its allowed range.
-    InvalidConfig {
-        field: &'static str,
-        value: f64,
-        allowed: &'static str,
-    },
+    InvalidConfig { field: &'static str, value: f64, allowed: &'static str },
     /// The initial state or a reinitialisation state has a NaN or infinite component.
     NonFiniteState { t: f64 },
     /// f returned NaN or ±∞ and no smaller step helped.

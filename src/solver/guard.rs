@@ -70,10 +70,7 @@ impl StabilityGuard {
             }
             let angle_deg = ev.im.atan2(-ev.re).to_degrees();
             if angle_deg <= MAX_ANGLE_DEG {
-                self.modes[self.count] = Mode {
-                    modulus: ev.norm(),
-                    angle_deg,
-                };
+                self.modes[self.count] = Mode { modulus: ev.norm(), angle_deg };
                 self.count += 1;
             }
         }
@@ -150,10 +147,7 @@ mod tests {
         let mut roots: Vec<C> = (0..q)
             .map(|k| {
                 let a = 0.4 + 0.9 * k as f64;
-                (
-                    0.9_f64.powi(k as i32) * a.cos(),
-                    0.9_f64.powi(k as i32) * a.sin(),
-                )
+                (0.9_f64.powi(k as i32) * a.cos(), 0.9_f64.powi(k as i32) * a.sin())
             })
             .collect();
         for _ in 0..500 {
@@ -167,20 +161,14 @@ mod tests {
                 roots[i] = sub(roots[i], div(eval(roots[i]), den));
             }
         }
-        roots
-            .iter()
-            .map(|w| 1.0 / (w.0 * w.0 + w.1 * w.1).sqrt())
-            .fold(0.0, f64::max)
+        roots.iter().map(|w| 1.0 / (w.0 * w.0 + w.1 * w.1).sqrt()).fold(0.0, f64::max)
     }
 
     #[test]
     fn root_finder_reproduces_known_peaks() {
         // numerics-notes.md: worst growth per step 1.046, 1.19, 1.38 for BDF3, 4, 5.
-        let peak = |q| {
-            (1..2000)
-                .map(|i| max_root_modulus(q, (0.0, i as f64 * 0.005)))
-                .fold(0.0, f64::max)
-        };
+        let peak =
+            |q| (1..2000).map(|i| max_root_modulus(q, (0.0, i as f64 * 0.005))).fold(0.0, f64::max);
         assert!((peak(3) - 1.0456).abs() < 1e-3);
         assert!((peak(4) - 1.1910).abs() < 1e-3);
         assert!((peak(5) - 1.3791).abs() < 1e-3);
@@ -193,16 +181,10 @@ mod tests {
         for q in 3..=5 {
             let (lo, hi) = unstable_band(q).unwrap();
             // Just inside the band the growth exceeds 1 + 1e-3 (lower end) or 1 (upper end).
-            assert!(
-                max_root_modulus(q, (0.0, lo + 0.01)) > 1.0 + 1e-3,
-                "q={q} lo"
-            );
+            assert!(max_root_modulus(q, (0.0, lo + 0.01)) > 1.0 + 1e-3, "q={q} lo");
             assert!(max_root_modulus(q, (0.0, hi - 0.01)) > 1.0, "q={q} hi");
             // The edges are tight to within 0.02 and rounded outwards.
-            assert!(
-                max_root_modulus(q, (0.0, lo - 0.02)) < 1.0 + 1e-3,
-                "q={q} below"
-            );
+            assert!(max_root_modulus(q, (0.0, lo - 0.02)) < 1.0 + 1e-3, "q={q} below");
             assert!(max_root_modulus(q, (0.0, hi)) <= 1.0 + 1e-9, "q={q} above");
             assert!(max_root_modulus(q, (0.0, hi - 0.02)) > 1.0, "q={q} tight");
         }
