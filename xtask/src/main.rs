@@ -1,0 +1,138 @@
+//! Project tasks: `cargo xtask <command>`. See `cargo xtask help`.
+//!
+//! Std only, like rust-analyzer's xtask: this crate must build from a fresh clone in seconds.
+
+mod fmu;
+mod python;
+mod summary;
+mod test;
+
+use std::env;
+use std::error::Error;
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, ExitStatus};
+
+type Result<T = (), E = Box<dyn Error>> = std::result::Result<T, E>;
+
+const HELP: &str = "\
+Usage: cargo xtask <command> [options]
+
+Commands:
+  test [--rust-only | --python-only]
+          Run the whole test suite: set up the Python venv (target/venv),
+          build the release binary, run the Rust tests and the Python tests.
+  fmu     Build the release binary, run the paper's scene (scenes/paper.toml)
+          and summarise the result (target/fmu/paper.csv).
+  help    Print this message.
+";
+
+fn main() -> ExitCode {
+    match run(&env::args().skip(1).collect::<Vec<_>>()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: &[String]) -> Result {
+    let (command, options) = match args.split_first() {
+        Some((command, options)) => (command.as_str(), options),
+        None => ("help", &[][..]),
+    };
+    match command {
+        "help" | "-h" | "--help" => {
+            no_options(command, options)?;
+            print!("{HELP}");
+            Ok(())
+        }
+        "test" => test::run(test::Scope::parse(options)?),
+        "fmu" => {
+            no_options(command, options)?;
+            fmu::run()
+        }
+        other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
+    }
+}
+
+fn no_options(command: &str, options: &[String]) -> Result {
+    match options.first() {
+        None => Ok(()),
+        Some(option) => {
+            Err(format!("`{command}` takes no option `{option}`; run `cargo xtask help`").into())
+        }
+    }
+}
+
+/// The workspace root: the parent of this crate's directory.
+fn project_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in a subdirectory of the workspace")
+        .to_path_buf()
+}
+
+/// Cargo's target directory (honours `CARGO_TARGET_DIR`).
+fn target_dir() -> PathBuf {
+    let root = project_root();
+    match env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) => root.join(dir),
+        None => root.join("target"),
+    }
+}
+
+/// A `cargo` command: the cargo that invoked us (`CARGO`), run in the project root.
+fn cargo<I, S>(args: I) -> Command
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<OsStr>,
+{
+    let mut cmd = Command::new(env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    cmd.args(args).current_dir(project_root());
+    cmd
+}
+
+/// Builds `target/release/beam-body` and returns its absolute path.
+fn build_release_binary() -> Result<PathBuf> {
+    run_cmd(&mut cargo(["build", "--release", "--bin", "beam-body"]))?;
+    Ok(target_dir().join("release").join("beam-body"))
+}
+
+/// Runs `cmd` with inherited stdio, echoing it first; a non-zero exit is an error.
+fn run_cmd(cmd: &mut Command) -> Result {
+    let status = status_of(cmd)?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`{}` failed ({status})", display(cmd)).into())
+    }
+}
+
+/// Runs `cmd` with inherited stdio, echoing it first, and returns how it ended.
+fn status_of(cmd: &mut Command) -> Result<ExitStatus> {
+    eprintln!("$ {}", display(cmd));
+    let status = cmd
+        .status()
+        .map_err(|err| format!("could not run `{}`: {err}", cmd.get_program().to_string_lossy()))?;
+    Ok(status)
+}
+
+/// `program arg1 arg2 ...`, for messages, with the program's path shortened.
+fn display(cmd: &Command) -> String {
+    let program = cmd.get_program();
+    let program = if env::var_os("CARGO").is_some_and(|cargo| cargo == program) {
+        "cargo".to_owned()
+    } else {
+        relative(Path::new(program))
+    };
+    let args = cmd.get_args().map(OsStr::to_string_lossy);
+    std::iter::once(program.into()).chain(args).collect::<Vec<_>>().join(" ")
+}
+
+/// `path` relative to the project root when it is inside it, for messages.
+fn relative(path: &Path) -> String {
+    let root = project_root();
+    path.strip_prefix(&root).unwrap_or(path).display().to_string()
+}
