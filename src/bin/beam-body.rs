@@ -234,18 +234,16 @@ fn cmd_simulate(args: &[String]) -> Result<(), Usage> {
 fn cmd_modes(args: &[String]) -> Result<(), Usage> {
     let cli = parse(args, false)?;
     let model = BeamBody::new(cli.scene.params).map_err(|e| Usage(e.to_string()))?;
-    println!("phi [rad]  v1_eq [m]      theta1_eq [rad]  T1 [s]     T2 [s]");
+    println!(
+        "{:<6}  {:>19}  {:>19}  {:>17}  {:>17}",
+        "phi", "v1_eq [m]", "theta1_eq [rad]", "T1 [s]", "T2 [s]"
+    );
     for (label, phi) in [("0", 0.0), ("pi/2", PI / 2.0), ("pi", PI)] {
         let m = model.modes(phi);
-        let fmt = |p: Option<f64>| p.map_or("unstable".to_string(), |t| format!("{t:.6}"));
+        let fmt = |p: Option<f64>| p.map_or("unstable".to_string(), |t| format!("{t:.15}"));
         let [t1, t2] = m.periods();
-        println!(
-            "{label:<9}  {:<+13.6e}  {:<+15.6e}  {:<9}  {}",
-            m.equilibrium.0,
-            m.equilibrium.1,
-            fmt(t1),
-            fmt(t2)
-        );
+        let (v, th) = m.equilibrium;
+        println!("{label:<6}  {v:>+19.12e}  {th:>+19.12e}  {:>17}  {:>17}", fmt(t1), fmt(t2));
     }
     Ok(())
 }

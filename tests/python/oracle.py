@@ -45,8 +45,9 @@ import sympy as sp
 PARAM_NAMES = ("l", "EI", "m", "M2", "J_C", "r", "g")
 DEFAULT_PARAMS = {"l": 2.5, "EI": 1000.0, "m": 2.0, "M2": 12.0, "J_C": 1.0, "r": 0.5, "g": 10.0}
 
-# Scene defaults (CLI contract); the paper's example is the default law with zero initial state.
-DEFAULT_SCENE = {
+# The paper's example (§4): default parameters and law, zero initial state, tau = t/T up to 12.
+# Every scene key of the CLI contract appears, so this also lists the names a scene may set.
+PAPER_SCENE = {
     **DEFAULT_PARAMS,
     "t_rot": 0.85,
     "phi_end": math.pi,
@@ -399,7 +400,7 @@ def _rhs_fun(name):
 
 
 def scene_with_defaults(scene=None):
-    s = dict(DEFAULT_SCENE)
+    s = dict(PAPER_SCENE)
     if scene:
         s.update({k: float(v) for k, v in scene.items()})
     return s
@@ -482,41 +483,123 @@ def reference_key(name, scene, method, rtol, atol):
 # --------------------------------------------------------------------------------------------------
 
 
+def _stiffness_fun():
+    """Lambdified exact Jacobian dR_reduced/d(v1, theta1) (2x2, row-major) in the ARGS_REDUCED layout."""
+    global _F_STIFF
+    if _F_STIFF is None:
+        _F_STIFF = _lambdify_list(ARGS_REDUCED, [sp.diff(e, x) for e in SYM["R_reduced"] for x in (v1s, th1s)])
+    return _F_STIFF
+
+
+_F_STIFF = None
+
+
+def _static_point(phi, q):
+    return np.array([phi, 0.0, 0.0, q[0], q[1], 0.0, 0.0, 0.0, 0.0])
+
+
 def static_equilibrium(phi, params=None):
-    """Static equilibrium (v1, theta1) of the reduced model at fixed phi (phi' = phi'' = 0)."""
+    """Static equilibrium (v1, theta1) of the reduced model at fixed phi (phi' = phi'' = 0): fsolve from
+    q = 0, then Newton steps with the exact Jacobian (fsolve may stop with "not making good progress"
+    once it is at rounding level for large static deflections); the residual must vanish relative to
+    the size of its terms."""
     from scipy.optimize import fsolve
 
     F = _FORMS["reduced"]
+    fK = _stiffness_fun()
 
     def res(q):
-        X = [[phi, 0.0, 0.0, q[0], q[1], 0.0, 0.0, 0.0, 0.0]]
-        return F.residual(X, params)[0]
+        return F.residual([_static_point(phi, q)], params)[0]
 
     q, info, ier, msg = fsolve(res, [0.0, 0.0], full_output=True, xtol=1e-14)
-    assert ier == 1, msg
-    assert np.max(np.abs(res(q))) < 1e-9
+    for _ in range(3):
+        X = _static_point(phi, q)
+        K = np.asarray(fK(*X, *_pvec(params))).reshape(2, 2)
+        q = q - np.linalg.solve(K, res(q))
+    scale = F.row_scale([_static_point(phi, q)], params)[0]
+    assert np.all(np.abs(res(q)) <= 1e-12 * (1.0 + scale)), (phi, q, res(q), msg)
     return q
 
 
-def natural_periods(phi, params=None):
-    """Periods (s, longest first) of small oscillations of the reduced model about its static equilibrium
-    at a fixed turn angle phi (drive locked: phi' = phi'' = 0). Linearization: Mass(q*) dq'' + K dq = 0
-    with K = dR/dq at q*, q' = q'' = 0 (velocity-dependent terms vanish at rest)."""
+def small_oscillations(phi, params=None):
+    """(q*, omega^2 ascending) of the reduced model linearized about its static equilibrium q* at a
+    fixed turn angle phi (drive locked: phi' = phi'' = 0): Mass(q*) dq'' + K dq = 0 with K = dR/dq at
+    q*, q' = q'' = 0 (velocity-dependent terms vanish at rest). No stability assumption: an
+    omega^2 <= 0 is a non-oscillatory (unstable) mode."""
     from scipy.linalg import eig
 
     F = _FORMS["reduced"]
     q = static_equilibrium(phi, params)
-    X0 = np.array([phi, 0.0, 0.0, q[0], q[1], 0.0, 0.0, 0.0, 0.0])
-    Mm, _ = F.mass_b([X0], params)
-    Mm = Mm[0]
+    X0 = _static_point(phi, q)
+    Mm = F.mass_b([X0], params)[0][0]
     # stiffness by exact symbolic differentiation
-    K = np.empty((2, 2))
-    for i, e in enumerate(SYM["R_reduced"]):
-        for j, x in enumerate((v1s, th1s)):
-            K[i, j] = float(
-                sp.diff(e, x).subs(dict(zip(ARGS_REDUCED, X0))).subs(dict(zip(PSYMS, _pvec(params))))
-            )
-    w2 = np.real(eig(K, Mm, right=False))
-    w2 = np.sort(w2)
+    K = np.asarray(_stiffness_fun()(*X0, *_pvec(params))).reshape(2, 2)
+    w2 = eig(K, Mm, right=False)
+    assert np.max(np.abs(np.imag(w2))) <= 1e-12 * np.max(np.abs(w2)), w2
+    return q, np.sort(np.real(w2))
+
+
+def natural_periods(phi, params=None):
+    """Periods (s, longest first) of small oscillations of the reduced model about its static equilibrium
+    at a fixed turn angle phi (drive locked: phi' = phi'' = 0); see small_oscillations. Both modes must
+    be oscillatory."""
+    _, w2 = small_oscillations(phi, params)
     assert np.all(w2 > 0), f"static equilibrium at phi={phi} is not stable: omega^2 = {w2}"
     return 2 * math.pi / np.sqrt(w2)
+
+
+# --------------------------------------------------------------------------------------------------
+# Hinge reactions N, P, M (paper eq. 18-19)
+# --------------------------------------------------------------------------------------------------
+# The body is freed: its own coordinates are the hinge displacement (u2 along x, v2 along y) and its
+# absolute angle Theta, with L_body = T2 - Pi2, C = (l + u2 + r cos Theta, v2 + r sin Theta),
+# T2 = 1/2 M2 |C'|^2 + 1/2 J_C Theta'^2, Pi2 = -M2 g (u2 + r cos Theta). With
+# E_x = d/dt dL_body/dx' - dL_body/dx the reactions are N = -E_u2, P = -E_v2, M = -E_Theta (the force
+# and moment the body applies to the beam tip), evaluated on the motion v2 = v1, Theta = theta1 + phi,
+# u2 = the hinge coordinate (u1(v1, theta1) in the reduced model).
+
+
+def _derive_reactions():
+    u2b = sp.Function("u2_body")(t)
+    v2b = sp.Function("v2_body")(t)
+    thb = sp.Function("Theta_body")(t)
+    xC = l + u2b + r * sp.cos(thb)
+    yC = v2b + r * sp.sin(thb)
+    T2 = sp.Rational(1, 2) * M2 * (xC.diff(t) ** 2 + yC.diff(t) ** 2) + sp.Rational(1, 2) * J_C * thb.diff(t) ** 2
+    Pi2 = -M2 * g * (u2b + r * sp.cos(thb))
+    E = _euler_lagrange(T2 - Pi2, [u2b, v2b, thb])
+    NPM = [-e for e in E]
+    # on the motion (derivatives replaced highest order first, then the functions themselves)
+    on = {u2b: _u2f, v2b: _v1f, thb: _th1f + _phif}
+    out = []
+    for e in NPM:
+        for k in (2, 1):
+            e = e.subs({f.diff(t, k): target.diff(t, k) for f, target in on.items()})
+        e = e.subs(on)
+        out.append(sp.expand(_to_symbols(e)))
+    return out
+
+
+SYM["reactions"] = _derive_reactions()
+_f_reactions = _lambdify_list(ARGS_DAE, SYM["reactions"])
+_f_u1_derivs = _lambdify_list(
+    (v1s, th1s, dv1s, dth1s, ddv1s, ddth1s), [SYM["u1"], SYM["du1"], SYM["ddu1"]]
+)
+
+
+def hinge_reactions_dae(X, params=None):
+    """X: (n, 12) rows in the ARGS_DAE layout (phi dphi ddphi v1 theta1 u2 dv1 dtheta1 du2 ddv1 ddtheta1
+    ddu2). Returns (n, 3): N, P, M."""
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    return _f_reactions(*[X[:, i] for i in range(X.shape[1])], *_pvec(params)).T
+
+
+def hinge_reactions_reduced(X, params=None):
+    """X: (n, 9) rows in the ARGS_REDUCED layout (phi dphi ddphi v1 theta1 dv1 dtheta1 ddv1 ddtheta1);
+    the hinge coordinate is u2 = u1(v1, theta1) with u2' and u2'' its exact time derivatives along the
+    motion. Returns (n, 3): N, P, M."""
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    ph_, dph_, ddph_, v1_, th1_, dv1_, dth1_, ddv1_, ddth1_ = (X[:, i] for i in range(9))
+    u, du, ddu = _f_u1_derivs(v1_, th1_, dv1_, dth1_, ddv1_, ddth1_, *_pvec(params))
+    Xd = np.stack([ph_, dph_, ddph_, v1_, th1_, u, dv1_, dth1_, du, ddv1_, ddth1_, ddu], axis=1)
+    return hinge_reactions_dae(Xd, params)

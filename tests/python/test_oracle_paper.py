@@ -33,22 +33,11 @@ TOL_U2_REDUCED = 1e-7  # m
 TOL_DRIFT_STABILIZED = 1e-12  # m
 CLI_RTOL = "1e-10"
 
-PAPER_EXAMPLE = {
-    **oracle.DEFAULT_PARAMS,
-    "t_rot": 0.85,
-    "phi_end": math.pi,
-    "phi0": 0.0,
-    "t_end": 10.2,
-    "dt_out": 0.0085,
-    "v1_0": 0.0,
-    "theta1_0": 0.0,
-    "dv1_0": 0.0,
-    "dtheta1_0": 0.0,
-}
+PAPER_EXAMPLE = oracle.PAPER_SCENE
 
 def scene_values(path) -> dict:
     raw = load_toml(path)
-    known = {k: float(v) for k, v in raw.items() if k in oracle.DEFAULT_SCENE}
+    known = {k: float(v) for k, v in raw.items() if k in oracle.PAPER_SCENE}
     return oracle.scene_with_defaults(known)
 
 
