@@ -109,6 +109,13 @@ impl BeamBody {
         Matrix2::new(-p, -l * qq - r * s, 1.0, r * c)
     }
 
+    /// The mass matrix M_b + M2·J_Cᵀ·J_C + J_C·e_ϑ·e_ϑᵀ for the Jacobian `jc` = ∂C/∂q.
+    fn mass(&self, jc: &Matrix2<f64>) -> Matrix2<f64> {
+        let mut mass = self.mb + jc.transpose() * jc * self.params.m2;
+        mass[(1, 1)] += self.params.j_c;
+        mass
+    }
+
     /// Eq. (15), dimensional: mass matrix M(q) and right-hand side F(q, q̇, t) such that
     /// M q̈ = F.
     pub fn reduced(
@@ -126,8 +133,7 @@ impl BeamBody {
             -w - r * c * dth * dth - r * s * phi.ddphi - g,
             -r * s * dth * dth + r * c * phi.ddphi,
         );
-        let mut mass = self.mb + jc.transpose() * jc * m2;
-        mass[(1, 1)] += j_c;
+        let mass = self.mass(&jc);
         let mut rhs = -(self.k * q) - jc.transpose() * a * m2;
         rhs[1] -= j_c * phi.ddphi;
         (mass, rhs)
@@ -161,8 +167,7 @@ impl BeamBody {
             0.0,
             -r * s0 * th,
         );
-        let mut mass = self.mb + jc0.transpose() * jc0 * m2;
-        mass[(1, 1)] += j_c;
+        let mass = self.mass(&jc0);
         let mut rhs = -(self.k * q) - (jc0.transpose() * (a0 + da) + djc.transpose() * a0) * m2;
         rhs[1] -= j_c * ddphi;
         (mass, rhs)

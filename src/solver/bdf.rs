@@ -59,6 +59,13 @@ const FD_MIN_INC_MULT: f64 = 1000.0;
 /// to land on it, rather than leave a sliver of a step (round-off in a fixed-step run).
 const LANDING_STRETCH: f64 = 1e-6;
 
+/// The step-size ratio that brings an error estimate `err` (in units of the tolerance, for
+/// a method whose error scales as h^`exponent`) to 1/`bias` of the tolerance:
+/// η = 1/((bias·err)^(1/exponent) + ADDON) (CVODE cvChooseEta and cvHandleNFlag).
+fn step_ratio(bias: f64, err: f64, exponent: usize) -> f64 {
+    1.0 / ((bias * err).powf(1.0 / exponent as f64) + ADDON)
+}
+
 /// What one call of [`Bdf::step`] achieved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StepOutcome {
@@ -397,7 +404,7 @@ impl<const N: usize> Bdf<N> {
             }
             let floor = self.cfg.h_min / self.h.abs();
             if error_failures < ERROR_FAILURES_ORDER_DROP {
-                let mut eta = 1.0 / ((BIAS_SAME * dsm).powf(1.0 / (self.q + 1) as f64) + ADDON);
+                let mut eta = step_ratio(BIAS_SAME, dsm, self.q + 1);
                 eta = eta.max(ETA_MIN).max(floor);
                 if error_failures >= ERROR_FAILURES_GROWTH_CAP {
                     eta = eta.min(ETA_MAX_AFTER_FAILURES);
@@ -746,14 +753,14 @@ impl<const N: usize> Bdf<N> {
         let q = self.q;
         let (mut q_next, mut eta) = (q, 1.0);
         if self.eta_max > 1.0 {
-            let eta_same = 1.0 / ((BIAS_SAME * dsm).powf(1.0 / (q + 1) as f64) + ADDON);
+            let eta_same = step_ratio(BIAS_SAME, dsm, q + 1);
             if self.qwait != 0 {
                 eta = eta_same;
             } else {
                 self.qwait = 2;
                 let eta_down = if q > 1 {
                     let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
-                    1.0 / ((BIAS_DOWN * ddn).powf(1.0 / q as f64) + ADDON)
+                    step_ratio(BIAS_DOWN, ddn, q)
                 } else {
                     0.0
                 };
@@ -763,7 +770,7 @@ impl<const N: usize> Bdf<N> {
                         * (self.h / self.tau[2]).powi(q as i32 + 1);
                     let diff = self.acor - self.zn[qmax] * ratio;
                     let dup = self.wrms(&diff) * self.coeffs.tq[3];
-                    1.0 / ((BIAS_UP * dup).powf(1.0 / (q + 2) as f64) + ADDON)
+                    step_ratio(BIAS_UP, dup, q + 2)
                 } else {
                     0.0
                 };
@@ -781,8 +788,7 @@ impl<const N: usize> Bdf<N> {
                 eta = 1.0;
                 q_next = q;
             } else {
-                eta = eta.min(self.eta_max);
-                eta /= (self.h.abs() * eta / self.cfg.h_max).max(1.0);
+                eta = self.limit_growth(eta);
             }
         } else {
             self.qwait = self.qwait.max(2);
@@ -807,10 +813,9 @@ impl<const N: usize> Bdf<N> {
         for k in 1..=limit.min(self.q) {
             factorial *= k as f64;
             let err = if k == self.q { dsm } else { factorial * self.wrms(&self.zn[k + 1]) };
-            let raw = 1.0 / ((BIAS_SAME * err).powf(1.0 / (k + 1) as f64) + ADDON);
+            let raw = step_ratio(BIAS_SAME, err, k + 1);
             // Grow only past the usual threshold; shrink at once if the estimate asks for it.
-            let mut eta = if raw < ETA_THRESHOLD { raw.min(1.0) } else { raw.min(self.eta_max) };
-            eta /= (self.h.abs() * eta / self.cfg.h_max).max(1.0);
+            let eta = if raw < ETA_THRESHOLD { raw.min(1.0) } else { self.limit_growth(raw) };
             if eta > best.1 && self.guard.max_safe_order(k, self.h * eta) == k {
                 best = (k, eta);
             }
@@ -819,6 +824,13 @@ impl<const N: usize> Bdf<N> {
     }
 
     // ----- helpers ------------------------------------------------------------------------
+
+    /// Caps a step-size ratio at `eta_max` and so that the step stays ≤ `h_max` (CVODE
+    /// cvSetEta).
+    fn limit_growth(&self, eta: f64) -> f64 {
+        let eta = eta.min(self.eta_max);
+        eta / (self.h.abs() * eta / self.cfg.h_max).max(1.0)
+    }
 
     fn eval_rhs<S: OdeSystem<N>>(
         &mut self,
