@@ -1,6 +1,6 @@
 //! Integration tests of the BDF integrator on problems with known solutions.
 
-use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem};
+use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem, StateVisitor};
 use nalgebra::{Matrix2, SMatrix, SVector, Vector1, Vector2, Vector3};
 
 /// Prothero–Robinson: y' = λ(y − sin t) + cos t, exact solution y = sin t.
@@ -195,6 +195,7 @@ fn two_oscillators(guard: bool, fast: f64) -> (f64, beam_body::solver::Stats) {
     let t_end = 200.0;
     while s.t() < t_end {
         s.step(&sys, t_end).unwrap();
+        s.check_state().unwrap();
         let y = s.y();
         amp = amp.max((y[1] * y[1] + (y[3] / fast).powi(2)).sqrt());
     }
@@ -221,4 +222,139 @@ fn stability_guard_prevents_growth_of_an_unresolved_undamped_mode() {
         on.rejected(),
         on.steps
     );
+}
+
+/// Writes a state as little-endian bytes, as an FMU's `fmi2SerializeFMUstate` would: reals by
+/// their bits, counts as u64, flags as one byte.
+struct ByteWriter(Vec<u8>);
+
+impl StateVisitor for ByteWriter {
+    fn real(&mut self, _: &'static str, x: &mut f64) {
+        self.0.extend(x.to_bits().to_le_bytes());
+    }
+    fn count(&mut self, _: &'static str, x: &mut u64) {
+        self.0.extend(x.to_le_bytes());
+    }
+    fn flag(&mut self, _: &'static str, x: &mut bool) {
+        self.0.push(u8::from(*x));
+    }
+}
+
+/// Reads what [`ByteWriter`] wrote from untrusted bytes. The visitor cannot fail, so the
+/// first problem (too few bytes, a flag byte other than 0 or 1) is recorded and the rest of
+/// the fields are left alone.
+struct ByteReader<'a> {
+    bytes: &'a [u8],
+    error: Option<&'static str>,
+}
+
+impl ByteReader<'_> {
+    fn take<const K: usize>(&mut self, name: &'static str) -> Option<[u8; K]> {
+        if self.error.is_some() {
+            return None;
+        }
+        match self.bytes.split_first_chunk::<K>() {
+            Some((head, rest)) => {
+                self.bytes = rest;
+                Some(*head)
+            }
+            None => {
+                self.error = Some(name);
+                None
+            }
+        }
+    }
+}
+
+impl StateVisitor for ByteReader<'_> {
+    fn real(&mut self, name: &'static str, x: &mut f64) {
+        if let Some(b) = self.take::<8>(name) {
+            *x = f64::from_bits(u64::from_le_bytes(b));
+        }
+    }
+    fn count(&mut self, name: &'static str, x: &mut u64) {
+        if let Some(b) = self.take::<8>(name) {
+            *x = u64::from_le_bytes(b);
+        }
+    }
+    fn flag(&mut self, name: &'static str, x: &mut bool) {
+        match self.take::<1>(name) {
+            Some([0]) => *x = false,
+            Some([1]) => *x = true,
+            Some(_) => self.error = Some(name),
+            None => {}
+        }
+    }
+}
+
+fn to_bytes<const N: usize>(s: &Bdf<N>) -> Vec<u8> {
+    let mut w = ByteWriter(Vec::new());
+    s.clone().visit_state(&mut w);
+    w.0
+}
+
+/// Reads a state from bytes into a fresh solver with configuration `cfg`.
+fn from_bytes<const N: usize>(cfg: &BdfConfig<N>, bytes: &[u8]) -> Result<Bdf<N>, String> {
+    let mut s = Bdf::new(cfg.clone(), 0.0, SVector::zeros()).map_err(|e| e.to_string())?;
+    let mut r = ByteReader { bytes, error: None };
+    s.visit_state(&mut r);
+    if let Some(field) = r.error {
+        return Err(format!("truncated or malformed at `{field}`"));
+    }
+    if !r.bytes.is_empty() {
+        return Err(format!("{} bytes left over", r.bytes.len()));
+    }
+    s.check_state().map_err(|e| e.to_string())?;
+    Ok(s)
+}
+
+/// A Robertson run saved to bytes at t = 1 and restored into a new solver ends at t = 40 with
+/// the same state, bit for bit, and the same work as the run without the interruption.
+#[test]
+fn state_saved_to_bytes_and_restored_continues_bit_for_bit() {
+    let mut cfg = BdfConfig::new(1e-4);
+    cfg.atol = Vector3::new(1e-8, 1e-14, 1e-6);
+    let mut s = Bdf::new(cfg.clone(), 0.0, Vector3::new(1.0, 0.0, 0.0)).unwrap();
+    s.advance(&Robertson, 1.0, f64::INFINITY).unwrap();
+    let bytes = to_bytes(&s);
+    let mut restored = from_bytes(&cfg, &bytes).unwrap();
+    s.advance(&Robertson, 40.0, 40.0).unwrap();
+    restored.advance(&Robertson, 40.0, 40.0).unwrap();
+    assert_eq!(to_bytes(&restored), to_bytes(&s));
+    assert_eq!(restored.y(), s.y());
+    assert_eq!(restored.stats(), s.stats());
+    let st = *restored.stats();
+    let work = (st.steps, st.rejected(), st.rhs_evals, st.jac_evals, st.lu_factorizations);
+    assert_eq!(work, ROBERTSON_WORK);
+}
+
+/// Truncated, extended and damaged bytes give an error or a state that passes the check and
+/// can be stepped; nothing panics.
+#[test]
+fn damaged_state_bytes_never_panic() {
+    let mut cfg = BdfConfig::new(1e-4);
+    cfg.atol = Vector3::new(1e-8, 1e-14, 1e-6);
+    cfg.max_steps = 100;
+    let mut s = Bdf::new(cfg.clone(), 0.0, Vector3::new(1.0, 0.0, 0.0)).unwrap();
+    s.advance(&Robertson, 1.0, f64::INFINITY).unwrap();
+    let bytes = to_bytes(&s);
+    for len in 0..bytes.len() {
+        assert!(from_bytes(&cfg, &bytes[..len]).is_err(), "truncated to {len} bytes");
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(from_bytes(&cfg, &longer).is_err());
+    // Every byte set to 0xff in turn, then to 0x7f.
+    let mut accepted = 0;
+    for value in [0xff, 0x7f] {
+        for i in 0..bytes.len() {
+            let mut damaged = bytes.clone();
+            damaged[i] = value;
+            if let Ok(mut r) = from_bytes(&cfg, &damaged) {
+                accepted += 1;
+                let _ = r.advance(&Robertson, 2.0, f64::INFINITY);
+            }
+        }
+    }
+    eprintln!("{accepted} of {} damaged states passed the check", 2 * bytes.len());
 }

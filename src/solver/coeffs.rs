@@ -12,6 +12,8 @@
 //! size of the k-th most recent accepted step. ξ_j = (t_n − t_{n−j}) / h, so ξ_1 = 1 and
 //! ξ_j = (h + τ_1 + … + τ_{j−1}) / h.
 
+use super::error::SolverError;
+use super::snapshot::{require_finite, require_not_below_zero, StateVisitor};
 use nalgebra::SVector;
 
 /// Highest BDF order.
@@ -29,6 +31,28 @@ pub(crate) struct StepCoeffs {
     /// tq[5] rescales a saved correction to the current step. tq[1] and tq[3] are computed
     /// only when an order change is being considered. Index 0 and 4 are unused.
     pub tq: [f64; NCOL],
+}
+
+impl StepCoeffs {
+    /// Visits l, then tq (see [`Bdf::visit_state`](super::Bdf::visit_state)).
+    pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
+        for x in &mut self.l {
+            v.real("coeffs.l", x);
+        }
+        for x in &mut self.tq {
+            v.real("coeffs.tq", x);
+        }
+    }
+
+    /// l is finite. tq is not negative: its entries are absolute values or 0. They may be
+    /// +∞ or NaN, which [`bdf_coeffs`] produces at isolated step ratios: a zero of
+    /// a2 = 1 + q·a1 makes tq[2] and tq[3] infinite, and a zero of 1/ξ* makes l_q = 0 and
+    /// tq[1], tq[5] = 0/0. The integrator recomputes the coefficients before it uses them,
+    /// so the stored ones never influence a later step.
+    pub(crate) fn check(&self) -> Result<(), SolverError> {
+        require_finite(&self.l, "coeffs.l")?;
+        require_not_below_zero(&self.tq, "coeffs.tq")
+    }
 }
 
 /// The ratios ξ_1..=ξ_{q+1} of the new step (index 0 unused).

@@ -1,6 +1,7 @@
 use std::fmt;
 
-/// Why the integrator stopped. Every variant names the time at which it happened.
+/// Why the integrator stopped or refused its input. Every failure of a step names the time at
+/// which it happened.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolverError {
     /// A configuration field is outside its allowed range.
@@ -23,6 +24,9 @@ pub enum SolverError {
     OutsideLastStep { t: f64, lo: f64, hi: f64 },
     /// The target time lies behind the solver's time.
     TimeBehind { t: f64, target: f64 },
+    /// A restored integrator state (see [`Bdf::visit_state`](super::Bdf::visit_state)) has a
+    /// field outside the values the integrator can produce: corrupt or foreign data.
+    InvalidState { field: &'static str },
 }
 
 impl fmt::Display for SolverError {
@@ -59,6 +63,9 @@ impl fmt::Display for SolverError {
             }
             TimeBehind { t, target } => {
                 write!(f, "target time {target} lies behind the solver time {t}")
+            }
+            InvalidState { field } => {
+                write!(f, "invalid integrator state: field `{field}` is out of range")
             }
         }
     }

@@ -12,6 +12,8 @@
 //! has h·|λ| inside the unstable band of the order used. BDF1 and BDF2 are A-stable and are
 //! never capped.
 
+use super::error::SolverError;
+use super::snapshot::{require, visit_usize, StateVisitor};
 use nalgebra::{DMatrix, SMatrix};
 
 /// The angle α (degrees) of A(α)-stability of BDF_q, index q (Hairer & Wanner II, table V.2.1).
@@ -74,6 +76,26 @@ impl StabilityGuard {
                 self.count += 1;
             }
         }
+    }
+
+    /// Visits every stored slot (modulus, angle), in use or not, then the count.
+    pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
+        for m in &mut self.modes {
+            v.real("guard.modulus", &mut m.modulus);
+            v.real("guard.angle", &mut m.angle_deg);
+        }
+        visit_usize(v, "guard.count", &mut self.count);
+    }
+
+    /// What [`update`](Self::update) stores: finite moduli ≥ 0, angles in
+    /// [0, `MAX_ANGLE_DEG`], at most `MAX_MODES` modes. Unused slots hold zeros or earlier
+    /// modes, which satisfy the same bounds.
+    pub(crate) fn check(&self) -> Result<(), SolverError> {
+        for m in &self.modes {
+            require(m.modulus.is_finite() && m.modulus >= 0.0, "guard.modulus")?;
+            require((0.0..=MAX_ANGLE_DEG).contains(&m.angle_deg), "guard.angle")?;
+        }
+        require(self.count <= MAX_MODES, "guard.count")
     }
 
     /// Forgets the stored modes (the guard then allows any order).

@@ -3,6 +3,8 @@
 //! nalgebra's `LU` needs typenum bounds (`Const<N>: DimMin`) that a generic `const N` cannot
 //! name, and this is twenty lines (Golub & Van Loan, *Matrix Computations*, alg. 3.4.1).
 
+use super::error::SolverError;
+use super::snapshot::{require, require_finite, visit_matrix, visit_usize, StateVisitor};
 use nalgebra::{SMatrix, SVector};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -48,6 +50,33 @@ impl<const N: usize> Lu<N> {
             }
         }
         Some(Self { factors: f, perm })
+    }
+
+    /// A stand-in for the fields of an absent LU when a state is visited: zero factors and
+    /// the identity permutation.
+    pub(crate) fn placeholder() -> Self {
+        Self { factors: SMatrix::zeros(), perm: std::array::from_fn(|i| i) }
+    }
+
+    /// Visits the factors (column-major), then the permutation.
+    pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
+        visit_matrix(v, "lu.factors", &mut self.factors);
+        for p in &mut self.perm {
+            visit_usize(v, "lu.perm", p);
+        }
+    }
+
+    /// What [`factor`](Self::factor) guarantees: finite factors, non-zero pivots, and a
+    /// permutation of 0..N (so [`solve`](Self::solve) indexes in range).
+    pub(crate) fn check(&self) -> Result<(), SolverError> {
+        require_finite(self.factors.iter(), "lu.factors")?;
+        require((0..N).all(|i| self.factors[(i, i)] != 0.0), "lu.factors")?;
+        let mut seen = [false; N];
+        for &p in &self.perm {
+            require(p < N && !seen[p], "lu.perm")?;
+            seen[p] = true;
+        }
+        Ok(())
     }
 
     /// Solves `a x = b`.

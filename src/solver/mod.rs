@@ -10,6 +10,7 @@ mod config;
 mod error;
 mod guard;
 mod lu;
+mod snapshot;
 mod stats;
 mod system;
 
@@ -17,5 +18,6 @@ pub use bdf::{Bdf, StepOutcome};
 pub use config::{BdfConfig, FixedStep};
 pub use error::SolverError;
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
+pub use snapshot::StateVisitor;
 pub use stats::Stats;
 pub use system::OdeSystem;
