@@ -4,12 +4,13 @@
 //! grid never shortens a step. At the law's breakpoint t_rot, where φ'' jumps, the
 //! integrator stops exactly and restarts at order 1 with the next smooth piece of φ.
 //! No I/O: rows go to a callback.
+#![forbid(unsafe_code)]
 
 use crate::model::{
-    pq, u1, BeamBody, DaeSystem, Formulation, Outputs, PaperLaw, ParamError, Params, PhiPiece,
-    TwoDofSystem,
+    pq, u1, BeamBody, DaeSystem, Formulation, Outputs, PaperLaw, ParamError, Params, Phi, PhiPiece,
+    TaylorSignal, TwoDofSystem, ValueHistory,
 };
-use crate::solver::{Bdf, BdfConfig, FixedStep, OdeSystem, SolverError, Stats};
+use crate::solver::{Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
 use nalgebra::SVector;
 use std::fmt;
 
@@ -35,11 +36,21 @@ pub struct SolverOptions {
     pub fixed_step: Option<FixedStep>,
     /// The BDF3–5 stability guard. Default on.
     pub stability_guard: bool,
+    /// Most internal steps in one call of the integrator (one output interval, one FMI
+    /// communication step), ≥ 1. Default 10⁷.
+    pub max_steps: u64,
 }
 
 impl Default for SolverOptions {
     fn default() -> Self {
-        Self { rtol: 1e-6, atol: None, max_order: 5, fixed_step: None, stability_guard: true }
+        Self {
+            rtol: 1e-6,
+            atol: None,
+            max_order: 5,
+            fixed_step: None,
+            stability_guard: true,
+            max_steps: 10_000_000,
+        }
     }
 }
 
@@ -52,8 +63,23 @@ impl SolverOptions {
         cfg.max_order = self.max_order;
         cfg.fixed_step = self.fixed_step;
         cfg.stability_guard = self.stability_guard;
+        cfg.max_steps = self.max_steps;
         cfg
     }
+}
+
+/// How φ reaches the model in a standalone run. The sampled feeds do what an FMI host does
+/// with the FMU at communication step `dt_comm`, so the FMU can be checked against them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhiFeed {
+    /// The law itself; its breakpoint is hit exactly.
+    Law,
+    /// At each communication point, the law's φ, φ', φ'' as a Taylor polynomial over the
+    /// step (a host that sends derivatives).
+    Derivatives,
+    /// The law's values at the communication points only, extrapolated by
+    /// [`ValueHistory`] (a host that sends values).
+    Values,
 }
 
 /// A scene: what to simulate and how to sample it.
@@ -68,6 +94,12 @@ pub struct Scene {
     pub t_end: f64,
     /// Output step [s], > 0. Default 0.01.
     pub dt_out: f64,
+    /// How φ reaches the model. Default [`PhiFeed::Law`].
+    pub phi_feed: PhiFeed,
+    /// Communication step of the sampled feeds [s], > 0. Default 0.01.
+    pub dt_comm: f64,
+    /// Degree of the extrapolation of [`PhiFeed::Values`], 0..=3. Default 3.
+    pub phi_extrapolation: usize,
 }
 
 impl Default for Scene {
@@ -80,12 +112,15 @@ impl Default for Scene {
             solver: SolverOptions::default(),
             t_end: 10.0,
             dt_out: 0.01,
+            phi_feed: PhiFeed::Law,
+            dt_comm: 0.01,
+            phi_extrapolation: ValueHistory::MAX_DEGREE,
         }
     }
 }
 
 /// Names [`Scene::set`] accepts besides the model parameters.
-pub const SCENE_KEYS: [&str; 16] = [
+pub const SCENE_KEYS: [&str; 19] = [
     "t_rot",
     "phi_end",
     "phi0",
@@ -102,6 +137,9 @@ pub const SCENE_KEYS: [&str; 16] = [
     "fixed_step",
     "fixed_order",
     "stability_guard",
+    "phi_feed",
+    "dt_comm",
+    "phi_extrapolation",
 ];
 
 impl Scene {
@@ -117,6 +155,19 @@ impl Scene {
                 "true" | "1" => true,
                 "false" | "0" => false,
                 _ => return Err(format!("`stability_guard` = {text}: must be true or false")),
+            };
+            return Ok(());
+        }
+        if name == "phi_feed" {
+            self.phi_feed = match text {
+                "law" => PhiFeed::Law,
+                "derivatives" => PhiFeed::Derivatives,
+                "values" => PhiFeed::Values,
+                _ => {
+                    return Err(format!(
+                        "`phi_feed` = {text}: must be one of law, derivatives, values"
+                    ))
+                }
             };
             return Ok(());
         }
@@ -140,6 +191,11 @@ impl Scene {
             "phi0" => range(finite, "finite").map(|_| self.law.phi0 = value),
             "t_end" => range(positive, "positive and finite").map(|_| self.t_end = value),
             "dt_out" => range(positive, "positive and finite").map(|_| self.dt_out = value),
+            "dt_comm" => range(positive, "positive and finite").map(|_| self.dt_comm = value),
+            "phi_extrapolation" => {
+                let ok = value.fract() == 0.0 && (0.0..=3.0).contains(&value);
+                range(ok, "an integer in 0..=3").map(|_| self.phi_extrapolation = value as usize)
+            }
             "v1_0" => range(finite, "finite").map(|_| self.initial.v1 = value),
             "theta1_0" => range(finite, "finite").map(|_| self.initial.theta1 = value),
             "dv1_0" => range(finite, "finite").map(|_| self.initial.dv1 = value),
@@ -170,12 +226,8 @@ impl Scene {
 
     /// The output times k·dt_out, k = 0, 1, …, ending exactly at t_end (a last, shorter
     /// interval if t_end is not a multiple of dt_out).
-    pub fn output_times(&self) -> impl Iterator<Item = f64> + '_ {
-        let ratio = self.t_end / self.dt_out;
-        let n = (ratio + 1e-9).floor() as u64;
-        let exact = (ratio - n as f64).abs() <= 1e-9 * ratio.max(1.0);
-        let last = if exact { n } else { n + 1 };
-        (0..=last).map(move |k| if k == last { self.t_end } else { k as f64 * self.dt_out })
+    pub fn output_times(&self) -> impl Iterator<Item = f64> {
+        grid(self.dt_out, self.t_end)
     }
 
     /// Checks everything that does not need the integrator.
@@ -222,20 +274,113 @@ impl From<SolverError> for SimError {
     }
 }
 
+/// The times k·`step`, k = 0, 1, …, ending exactly at `t_end` (a last, shorter interval if
+/// `t_end` is not a multiple of `step`).
+fn grid(step: f64, t_end: f64) -> impl Iterator<Item = f64> {
+    let ratio = t_end / step;
+    let n = (ratio + 1e-9).floor() as u64;
+    let exact = (ratio - n as f64).abs() <= 1e-9 * ratio.max(1.0);
+    let last = if exact { n } else { n + 1 };
+    (0..=last).map(move |k| if k == last { t_end } else { k as f64 * step })
+}
+
 /// Runs the scene, calling `sink` with the outputs at every output time. Returns the
 /// integrator's counters.
 pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Stats, SimError> {
     let model = scene.validate()?;
-    let init = scene.initial;
-    match scene.formulation {
-        Formulation::Reduced | Formulation::Linear => {
-            let linear = scene.formulation == Formulation::Linear;
-            let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            let make = |phi| TwoDofSystem { model: &model, phi, linear };
-            run(scene, y0, make, |s, t, y| s.outputs(t, y), &mut sink)
+    let law = scene.law;
+    // As the FMU starts: the law, the host's derivatives, or the value at rest.
+    let start = match scene.phi_feed {
+        PhiFeed::Law => law.piece_from(0.0),
+        PhiFeed::Derivatives => {
+            PhiPiece::Taylor(TaylorSignal { t0: 0.0, at_t0: law.eval(0.0), jerk: 0.0 })
         }
-        Formulation::Dae | Formulation::DaeStabilized => {
-            let stabilized = scene.formulation == Formulation::DaeStabilized;
+        PhiFeed::Values => PhiPiece::Taylor(TaylorSignal {
+            t0: 0.0,
+            at_t0: Phi { phi: law.eval(0.0).phi, dphi: 0.0, ddphi: 0.0 },
+            jerk: 0.0,
+        }),
+    };
+    let mut run = Run::new(model, scene.formulation, &scene.solver, 0.0, scene.initial, start)?;
+    let mut outputs = scene.output_times().peekable();
+    if scene.phi_feed == PhiFeed::Law {
+        for t in outputs {
+            run.advance_law(&law, t, scene.t_end)?;
+            sink(&run.outputs_at(t)?);
+        }
+        return Ok(run.stats());
+    }
+    let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
+    let mut history = ValueHistory::default();
+    for w in comm.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let signal = match scene.phi_feed {
+            PhiFeed::Derivatives => TaylorSignal { t0: a, at_t0: law.eval(a), jerk: 0.0 },
+            _ => {
+                history.push(a, law.eval(a).phi);
+                let start = run.piece().eval(a);
+                history.piece(scene.phi_extrapolation, start, b - a).expect("a sample, h > 0")
+            }
+        };
+        run.switch_piece(PhiPiece::Taylor(signal))?;
+        while let Some(&t) = outputs.peek() {
+            if t > b {
+                break;
+            }
+            run.advance(t, b)?;
+            sink(&run.outputs_at(t)?);
+            outputs.next();
+        }
+        run.advance(b, b)?;
+    }
+    Ok(run.stats())
+}
+
+/// The integrator and the model for a formulation chosen at run time, advanced piece by
+/// piece of φ. The standalone driver ([`simulate`]) and the FMU both step through it, so they
+/// integrate the same way. `Clone` copies everything (FMU state save and restore).
+#[derive(Clone, Debug)]
+pub struct Run {
+    model: BeamBody,
+    formulation: Formulation,
+    piece: PhiPiece,
+    bdf: Integrator,
+}
+
+/// Whether two times differ by no more than a few ulps: the round-off of a host's tc + h.
+fn within_rounding(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 16.0 * f64::EPSILON * a.abs().max(b.abs())
+}
+
+fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
+    TwoDofSystem { model, phi, linear: formulation == Formulation::Linear }
+}
+
+fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
+    DaeSystem { model, phi, stabilized: formulation == Formulation::DaeStabilized }
+}
+
+/// Four states (reduced, linear) or six (dae, dae-stabilized). The variants differ by
+/// 0.5 kB; a run holds one, so boxing would only add an indirection to every step.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug)]
+enum Integrator {
+    Two(Bdf<4>),
+    Dae(Bdf<6>),
+}
+
+impl Run {
+    /// A run from `init` at `t0`, with φ from `piece` until [`set_piece`](Self::set_piece).
+    /// The DAE's u2 and u̇2 start consistent.
+    pub fn new(
+        model: BeamBody,
+        formulation: Formulation,
+        options: &SolverOptions,
+        t0: f64,
+        init: InitialState,
+        piece: PhiPiece,
+    ) -> Result<Self, SolverError> {
+        let bdf = if formulation.is_dae() {
             let l = model.params.l;
             let (p, q) = pq(l, init.v1, init.theta1);
             let y0 = SVector::<f64, 6>::from([
@@ -246,49 +391,143 @@ pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Stats, 
                 init.dtheta1,
                 -p * init.dv1 - l * q * init.dtheta1,
             ]);
-            let make = |phi| DaeSystem { model: &model, phi, stabilized };
-            run(scene, y0, make, |s, t, y| s.outputs(t, y), &mut sink)
-        }
+            Integrator::Dae(Bdf::new(options.config(), t0, y0)?)
+        } else {
+            let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
+            Integrator::Two(Bdf::new(options.config(), t0, y0)?)
+        };
+        Ok(Self { model, formulation, piece, bdf })
     }
-}
 
-fn run<const N: usize, S: OdeSystem<N>>(
-    scene: &Scene,
-    y0: SVector<f64, N>,
-    make: impl Fn(PhiPiece) -> S,
-    outputs: impl Fn(&S, f64, &SVector<f64, N>) -> Outputs,
-    sink: &mut impl FnMut(&Outputs),
-) -> Result<Stats, SimError> {
-    let law = scene.law;
-    let mut segment_ends = Vec::with_capacity(2);
-    if law.breakpoint() < scene.t_end {
-        segment_ends.push(law.breakpoint());
+    pub fn model(&self) -> &BeamBody {
+        &self.model
     }
-    segment_ends.push(scene.t_end);
-    let mut segment = 0;
-    let mut sys = make(law.piece_from(0.0));
-    let mut solver = Bdf::new(scene.solver.config(), 0.0, y0)?;
-    for t in scene.output_times() {
-        if t == 0.0 {
-            sink(&outputs(&sys, 0.0, &y0));
-            continue;
+
+    pub fn formulation(&self) -> Formulation {
+        self.formulation
+    }
+
+    /// The solver's time: that of its last step.
+    pub fn t(&self) -> f64 {
+        match &self.bdf {
+            Integrator::Two(b) => b.t(),
+            Integrator::Dae(b) => b.t(),
         }
+    }
+
+    /// The piece of φ in use.
+    pub fn piece(&self) -> PhiPiece {
+        self.piece
+    }
+
+    pub fn stats(&self) -> Stats {
+        match &self.bdf {
+            Integrator::Two(b) => *b.stats(),
+            Integrator::Dae(b) => *b.stats(),
+        }
+    }
+
+    /// Uses `piece` for φ from now on. With `restart`, the integrator drops its step history
+    /// and restarts at order 1 (for a jump of φ''); without, the error test sees the change.
+    pub fn set_piece(&mut self, piece: PhiPiece, restart: bool) -> Result<(), SolverError> {
+        self.piece = piece;
+        if restart {
+            match &mut self.bdf {
+                Integrator::Two(b) => b.reinit(b.t(), *b.y()),
+                Integrator::Dae(b) => b.reinit(b.t(), *b.y()),
+            }?;
+        }
+        Ok(())
+    }
+
+    /// Switches to `piece`, restarting the integrator if φ, φ' or φ'' jump at the current
+    /// time (by more than round-off). A jump of φ'' is a jump of f: kept across it, the step
+    /// history makes the error test fail repeatedly at tight tolerances (the paper's scene
+    /// with derivatives sent every 8.5 ms failed at rtol 1e-10 without this restart).
+    pub fn switch_piece(&mut self, piece: PhiPiece) -> Result<(), SolverError> {
+        let t = self.t();
+        let (old, new) = (self.piece.eval(t), piece.eval(t));
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
+        let jump =
+            !(same(old.phi, new.phi) && same(old.dphi, new.dphi) && same(old.ddphi, new.ddphi));
+        self.set_piece(piece, jump)
+    }
+
+    fn two_dof(&self) -> TwoDofSystem<'_> {
+        two_dof(&self.model, self.piece, self.formulation)
+    }
+
+    fn dae(&self) -> DaeSystem<'_> {
+        dae(&self.model, self.piece, self.formulation)
+    }
+
+    /// Steps with the current piece until t ≥ `tout`, never past `tstop`
+    /// ([`Bdf::advance`]).
+    /// A `tout` within rounding of the solver's time takes no step.
+    pub fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
+        if tout > self.t() && within_rounding(tout, self.t()) {
+            return Ok(());
+        }
+        let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
+        match &mut self.bdf {
+            Integrator::Two(b) => b.advance(&two_dof(model, piece, formulation), tout, tstop),
+            Integrator::Dae(b) => b.advance(&dae(model, piece, formulation), tout, tstop),
+        }
+    }
+
+    /// [`advance`](Self::advance) with φ from `law`: lands exactly on the law's breakpoint
+    /// and restarts there with the next piece, so f is never evaluated across the jump of
+    /// φ''. The current piece must be `law.piece_from(self.t())`.
+    pub fn advance_law(
+        &mut self,
+        law: &PaperLaw,
+        tout: f64,
+        tstop: f64,
+    ) -> Result<(), SolverError> {
+        let bp = law.breakpoint();
+        // A stop within rounding of the breakpoint is the breakpoint (a host's tc + h), so the
+        // integrator never takes a step of a few ulps after landing on it.
+        let tstop = if within_rounding(tstop, bp) { bp } else { tstop };
+        let tout = tout.min(tstop);
         loop {
-            let end = segment_ends[segment];
-            if t <= end {
-                solver.advance(&sys, t, end)?;
-                sink(&outputs(&sys, t, &solver.interpolate(t)?));
-                break;
+            let turning = matches!(self.piece, PhiPiece::Turn(_));
+            if turning && self.t() >= bp && tout > self.t() {
+                self.set_piece(law.piece_from(bp), true)?;
+                continue;
             }
-            // Cross the breakpoint: land on it, then restart with the next piece of φ.
-            solver.advance(&sys, end, end)?;
-            let y = *solver.y();
-            segment += 1;
-            sys = make(law.piece_from(end));
-            solver.reinit(end, y)?;
+            if turning && tout > bp && tstop > bp {
+                self.advance(bp, bp)?;
+                continue;
+            }
+            let stop = if turning { tstop.min(bp) } else { tstop };
+            return self.advance(tout, stop);
         }
     }
-    Ok(*solver.stats())
+
+    /// The outputs at `t` inside the last step (dense output), with the current piece.
+    pub fn outputs_at(&self, t: f64) -> Result<Outputs, SolverError> {
+        Ok(match &self.bdf {
+            Integrator::Two(b) => self.two_dof().outputs(t, &b.interpolate(t)?),
+            Integrator::Dae(b) => self.dae().outputs(t, &b.interpolate(t)?),
+        })
+    }
+
+    /// Visits the integrator's state ([`Bdf::visit_state`]); the model, formulation and
+    /// settings are the caller's to restore.
+    pub fn visit_state(&mut self, v: &mut impl StateVisitor) {
+        match &mut self.bdf {
+            Integrator::Two(b) => b.visit_state(v),
+            Integrator::Dae(b) => b.visit_state(v),
+        }
+    }
+
+    /// Checks a state written by a visitor ([`Bdf::check_state`]).
+    pub fn check_state(&self) -> Result<(), SolverError> {
+        match &self.bdf {
+            Integrator::Two(b) => b.check_state(),
+            Integrator::Dae(b) => b.check_state(),
+        }
+    }
 }
 
 #[cfg(test)]

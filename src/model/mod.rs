@@ -14,5 +14,5 @@ pub use dynamics::{BeamBody, Modes, Reactions};
 pub use formulation::Formulation;
 pub use kinematics::{pq, u1, u1_accel_bias};
 pub use params::{ParamError, Params};
-pub use phi::{PaperLaw, Phi, PhiPiece, TaylorSignal};
+pub use phi::{PaperLaw, Phi, PhiPiece, TaylorSignal, ValueHistory};
 pub use systems::{DaeSystem, Outputs, TwoDofSystem};
