@@ -23,6 +23,7 @@
 //! assert!(last.v1.abs() < 1.0 && stats.rejected() < stats.steps);
 //! ```
 
+pub mod fmi2;
 pub mod model;
 pub mod sim;
 pub mod solver;

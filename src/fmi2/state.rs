@@ -1,0 +1,343 @@
+//! The byte format of a serialized FMU state, and its reader for untrusted bytes.
+//!
+//! Layout (all integers little-endian):
+//!
+//! | bytes | content |
+//! |-------|---------|
+//! | 8     | magic `BBFMUST\0` |
+//! | 4     | format version, [`VERSION`] |
+//! | 38    | the model's GUID (a state from another interface is refused) |
+//! | 8     | payload length n |
+//! | n     | payload: the fields of [`Core`] in the order of [`visit_core`]; a real is its 8 IEEE-754 bytes, a count 8 bytes, a flag one byte 0 or 1 |
+//! | 8     | FNV-1a 64 checksum of everything before it |
+//!
+//! The field list is written once, in [`visit_core`], which both the writer and the reader
+//! run: they cannot disagree. The reader checks the frame, then every field: finite reals,
+//! parameters in their ranges (the same checks as fmi2SetReal), integrator order, steps and
+//! history (`Bdf::check_state`). Malformed bytes give an error, never a panic.
+#![forbid(unsafe_code)]
+
+use super::instance::{Core, State, Values};
+use super::variables::{guid, Causality, VARIABLES};
+use crate::model::{Formulation, Phi, PhiPiece, TaylorSignal, ValueHistory};
+use crate::solver::StateVisitor;
+
+const MAGIC: &[u8; 8] = b"BBFMUST\0";
+/// Version of the byte format; bump it when [`visit_core`] changes.
+pub const VERSION: u32 = 1;
+const GUID_LEN: usize = 38;
+const HEADER: usize = 8 + 4 + GUID_LEN + 8;
+
+/// FNV-1a, 64-bit (Fowler, Noll, Vo; offset basis and prime from the FNV reference).
+fn fnv1a_64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3))
+}
+
+/// Serializes a snapshot.
+pub(super) fn serialize(core: &Core) -> Vec<u8> {
+    let mut writer = Writer(Vec::with_capacity(1024));
+    let mut copy = core.clone();
+    visit_core(&mut copy, &mut writer).expect("a valid snapshot writes without error");
+    let payload = writer.0;
+    let mut out = Vec::with_capacity(HEADER + payload.len() + 8);
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(guid().as_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&payload);
+    let sum = fnv1a_64(&out);
+    out.extend_from_slice(&sum.to_le_bytes());
+    out
+}
+
+/// Reads a snapshot from untrusted bytes.
+pub(super) fn deserialize(bytes: &[u8]) -> Result<Core, String> {
+    if bytes.len() < HEADER + 8 {
+        return Err(format!(
+            "{} bytes is too short for an FMU state (at least {})",
+            bytes.len(),
+            HEADER + 8
+        ));
+    }
+    if &bytes[..8] != MAGIC {
+        return Err("not a BeamBody FMU state (bad magic bytes)".into());
+    }
+    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if version != VERSION {
+        return Err(format!("state format version {version} is not supported: must be {VERSION}"));
+    }
+    if &bytes[12..12 + GUID_LEN] != guid().as_bytes() {
+        return Err("the state was saved by a different model interface (GUID differs)".into());
+    }
+    let n = u64::from_le_bytes(bytes[12 + GUID_LEN..HEADER].try_into().expect("8 bytes"));
+    let expected = (bytes.len() - HEADER - 8) as u64;
+    if n != expected {
+        return Err(format!("payload length {n} does not match the {expected} bytes present"));
+    }
+    let (body, sum) = bytes.split_at(bytes.len() - 8);
+    if fnv1a_64(body) != u64::from_le_bytes(sum.try_into().expect("8 bytes")) {
+        return Err("checksum mismatch: the state bytes are corrupt".into());
+    }
+    let mut reader = Reader { bytes: &body[HEADER..], pos: 0, error: None };
+    let mut core = Core::new();
+    let visited = visit_core(&mut core, &mut reader);
+    if let Some(e) = reader.error {
+        return Err(e);
+    }
+    visited?;
+    if reader.pos != reader.bytes.len() {
+        return Err(format!(
+            "{} unread bytes after the last field",
+            reader.bytes.len() - reader.pos
+        ));
+    }
+    Ok(core)
+}
+
+/// Visits every field of a snapshot; the writer reads them, the reader overwrites and
+/// checks them. Fields that index something are converted, and checked, on the way.
+pub(super) fn visit_core(core: &mut Core, v: &mut impl StateVisitor) -> Result<(), String> {
+    let mut state = core.state.to_index();
+    v.count("state", &mut state);
+    core.state = State::from_index(state)
+        .filter(|s| *s != State::Fatal)
+        .ok_or_else(|| format!("field `state` = {state} is not a state an FMU state can hold"))?;
+    visit_values(&mut core.values, v)?;
+
+    let s = &mut core.setup;
+    let mut tol = s.tolerance.unwrap_or(0.0);
+    let mut has_tol = s.tolerance.is_some();
+    v.flag("tolerance_defined", &mut has_tol);
+    v.real("tolerance", &mut tol);
+    s.tolerance = has_tol.then_some(tol);
+    v.real("start_time", &mut s.start_time);
+    let mut stop = s.stop_time.unwrap_or(0.0);
+    let mut has_stop = s.stop_time.is_some();
+    v.flag("stop_time_defined", &mut has_stop);
+    v.real("stop_time", &mut stop);
+    s.stop_time = has_stop.then_some(stop);
+    v.real("time", &mut core.time);
+    v.real("last_successful_time", &mut core.last_successful_time);
+    v.flag("terminated", &mut core.terminated);
+    for (k, slot) in core.pending.iter_mut().enumerate() {
+        let mut x = slot.unwrap_or(0.0);
+        let mut set = slot.is_some();
+        v.flag(["pending_dphi_set", "pending_ddphi_set"][k], &mut set);
+        v.real(["pending_dphi", "pending_ddphi"][k], &mut x);
+        *slot = set.then_some(x);
+    }
+    let mut samples: Vec<(f64, f64)> = core.history.samples().collect();
+    let mut len = samples.len() as u64;
+    v.count("history_len", &mut len);
+    if len > ValueHistory::MAX_DEGREE as u64 + 1 {
+        return Err(format!("field `history_len` = {len} is out of range: at most 4"));
+    }
+    samples.resize(len as usize, (0.0, 0.0));
+    for (t, u) in samples.iter_mut() {
+        v.real("history_t", t);
+        v.real("history_phi", u);
+    }
+    core.history = ValueHistory::from_samples(&samples)
+        .ok_or("field `history`: times must be finite and decreasing, values finite")?;
+    check_head(core)?;
+
+    let mut has_run = core.run.is_some();
+    v.flag("run", &mut has_run);
+    let needs_run =
+        matches!(core.state, State::StepComplete | State::StepFailed | State::Terminated);
+    let may_run = needs_run || core.state == State::Error;
+    if has_run != needs_run && !(has_run && may_run) {
+        return Err(format!("field `run` = {has_run} contradicts the state `{:?}`", core.state));
+    }
+    if !has_run {
+        core.run = None;
+        return Ok(());
+    }
+    if core.run.is_none() {
+        core.run = Some(core.build_run().map_err(|e| format!("the saved parameters: {e}"))?);
+    }
+    let run = core.run.as_mut().expect("built above");
+    let mut piece = run.piece();
+    visit_piece(&mut piece, core.values, v)?;
+    run.set_piece(piece, false).map_err(|e| e.to_string())?;
+    run.visit_state(v);
+    run.check_state().map_err(|e| e.to_string())?;
+    // After every step, successful or not, the communication time, the last successful
+    // time and the integrator's time agree (up to the rounding of tc + h).
+    let fuzz = 64.0 * f64::EPSILON * core.time.abs().max(1.0);
+    for (name, t) in
+        [("integrator time", run.t()), ("last_successful_time", core.last_successful_time)]
+    {
+        if (t - core.time).abs() > fuzz {
+            return Err(format!("field `{name}` = {t} does not match `time` = {}", core.time));
+        }
+    }
+    Ok(())
+}
+
+/// Parameters and input; checked with the same rules as fmi2SetReal.
+fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), String> {
+    let p = &mut values.params;
+    for (name, x) in [
+        ("l", &mut p.l),
+        ("EI", &mut p.ei),
+        ("m", &mut p.m),
+        ("M2", &mut p.m2),
+        ("J_C", &mut p.j_c),
+        ("r", &mut p.r),
+        ("g", &mut p.g),
+    ] {
+        v.real(name, x);
+    }
+    v.real("phi0", &mut values.law.phi0);
+    v.real("t_rot", &mut values.law.t_rot);
+    v.real("phi_end", &mut values.law.phi_end);
+    v.real("atol", &mut values.atol);
+    v.real("fixed_step", &mut values.fixed_step);
+    let mut f = Formulation::ALL.iter().position(|f| *f == values.formulation).unwrap_or(0) as u64;
+    v.count("formulation", &mut f);
+    values.formulation = *Formulation::ALL
+        .get(f as usize)
+        .ok_or_else(|| format!("field `formulation` = {f} is out of range"))?;
+    let mut src = values.phi_source as u64;
+    v.count("phi_source", &mut src);
+    values.phi_source = match src {
+        0 => super::instance::PhiSource::Input,
+        1 => super::instance::PhiSource::Law,
+        _ => return Err(format!("field `phi_source` = {src} is out of range")),
+    };
+    for (name, k) in [
+        ("max_order", &mut values.max_order),
+        ("fixed_order", &mut values.fixed_order),
+        ("phi_extrapolation", &mut values.phi_extrapolation),
+    ] {
+        let mut c = *k as u64;
+        v.count(name, &mut c);
+        *k = i32::try_from(c).map_err(|_| format!("field `{name}` = {c} is out of range"))?;
+    }
+    v.flag("stability_guard", &mut values.stability_guard);
+    v.real("phi", &mut values.phi);
+    // The same range checks as fmi2Set*.
+    let mut scratch = Values::from_table();
+    for var in VARIABLES.iter().filter(|var| var.causality != Causality::Output) {
+        let value = values.get(var.var).expect("parameters and the input have values");
+        scratch.set(var, value).map_err(|e| format!("field {e}"))?;
+    }
+    values.law.validate().map_err(|e| format!("field {e}"))
+}
+
+fn check_head(core: &Core) -> Result<(), String> {
+    let s = &core.setup;
+    if let Some(tol) = s.tolerance {
+        if !(tol.is_finite() && (1e-14..=1.0).contains(&tol)) {
+            return Err(format!(
+                "field `tolerance` = {tol} is out of range: must be in [1e-14, 1]"
+            ));
+        }
+    }
+    if !s.start_time.is_finite() {
+        return Err(format!("field `start_time` = {} is not finite", s.start_time));
+    }
+    if let Some(stop) = s.stop_time {
+        if !(stop.is_finite() && stop >= s.start_time) {
+            return Err(format!(
+                "field `stop_time` = {stop} is out of range: must be >= start_time"
+            ));
+        }
+    }
+    for (name, t) in [("time", core.time), ("last_successful_time", core.last_successful_time)] {
+        if !(t.is_finite() && t >= s.start_time) {
+            return Err(format!(
+                "field `{name}` = {t} is out of range: must be finite and >= start_time"
+            ));
+        }
+    }
+    if core.pending.iter().flatten().any(|x| !x.is_finite()) {
+        return Err("field `pending` holds a non-finite derivative".into());
+    }
+    Ok(())
+}
+
+/// The piece of φ in use: a kind and five reals, whatever the kind.
+fn visit_piece(
+    piece: &mut PhiPiece,
+    values: Values,
+    v: &mut impl StateVisitor,
+) -> Result<(), String> {
+    let (mut kind, mut r) = match *piece {
+        PhiPiece::Turn(_) => (0u64, [0.0; 5]),
+        PhiPiece::Hold(x) => (1, [x, 0.0, 0.0, 0.0, 0.0]),
+        PhiPiece::Taylor(s) => (2, [s.t0, s.at_t0.phi, s.at_t0.dphi, s.at_t0.ddphi, s.jerk]),
+    };
+    v.count("piece_kind", &mut kind);
+    for (name, x) in
+        ["piece_t0", "piece_phi", "piece_dphi", "piece_ddphi", "piece_jerk"].iter().zip(&mut r)
+    {
+        v.real(name, x);
+    }
+    if r.iter().any(|x| !x.is_finite()) {
+        return Err("field `piece` holds a non-finite value".into());
+    }
+    *piece = match kind {
+        0 => PhiPiece::Turn(values.law),
+        1 => PhiPiece::Hold(r[0]),
+        2 => PhiPiece::Taylor(TaylorSignal {
+            t0: r[0],
+            at_t0: Phi { phi: r[1], dphi: r[2], ddphi: r[3] },
+            jerk: r[4],
+        }),
+        _ => return Err(format!("field `piece_kind` = {kind} is out of range: must be 0, 1 or 2")),
+    };
+    Ok(())
+}
+
+struct Writer(Vec<u8>);
+
+impl StateVisitor for Writer {
+    fn real(&mut self, _: &'static str, x: &mut f64) {
+        self.0.extend_from_slice(&x.to_bits().to_le_bytes());
+    }
+    fn count(&mut self, _: &'static str, x: &mut u64) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn flag(&mut self, _: &'static str, x: &mut bool) {
+        self.0.push(*x as u8);
+    }
+}
+
+/// Reads fields in order; the first short read or bad flag is kept in `error`, and every
+/// later read yields zero, so the visit completes and the caller reports the error.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    error: Option<String>,
+}
+
+impl Reader<'_> {
+    fn take<const K: usize>(&mut self, name: &str) -> [u8; K] {
+        if self.error.is_none() {
+            if let Some(chunk) = self.bytes.get(self.pos..self.pos + K) {
+                self.pos += K;
+                return chunk.try_into().expect("K bytes");
+            }
+            self.error = Some(format!("the state ends before field `{name}`"));
+        }
+        [0; K]
+    }
+}
+
+impl StateVisitor for Reader<'_> {
+    fn real(&mut self, name: &'static str, x: &mut f64) {
+        *x = f64::from_bits(u64::from_le_bytes(self.take(name)));
+    }
+    fn count(&mut self, name: &'static str, x: &mut u64) {
+        *x = u64::from_le_bytes(self.take(name));
+    }
+    fn flag(&mut self, name: &'static str, x: &mut bool) {
+        let [b] = self.take::<1>(name);
+        if b > 1 && self.error.is_none() {
+            self.error = Some(format!("field `{name}` = {b} is not a flag (0 or 1)"));
+        }
+        *x = b == 1;
+    }
+}
