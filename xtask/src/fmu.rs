@@ -1,41 +1,430 @@
-//! `cargo xtask fmu`.
+//! `cargo xtask fmu`: build, package and run the FMU.
 //!
-//! The FMU does not exist yet (a later issue). Packaging it belongs here: once the cdylib
-//! exports the FMI 2.0 co-simulation API, this module will zip
-//!
-//! ```text
-//! modelDescription.xml
-//! binaries/linux64/BeamBody.so     (target/release/libbeam_body.so)
-//! documentation/index.html
-//! ```
-//!
-//! into `target/fmu/BeamBody.fmu` (std only: stored zip entries need nothing but a CRC-32).
-//! Until then this command runs the paper's scene through the standalone solver and prints
-//! a summary of the result.
+//! 1. Refuse a stale `modelDescription/modelDescription.xml` (regenerated in memory and
+//!    compared byte for byte).
+//! 2. Run the paper's scene (`scenes/paper.toml`) through the standalone solver: the
+//!    reference, `target/fmu/paper.csv`.
+//! 3. `cargo build --release --lib`: `target/release/libbeam_body.so`.
+//! 4. Zip `target/fmu/BeamBody.fmu`:
+//!    ```text
+//!    modelDescription.xml
+//!    binaries/linux64/BeamBody.so      (a copy of libbeam_body.so)
+//!    documentation/index.html          (generated from the interface tables)
+//!    ```
+//!    When the test venv (`target/venv`) exists, FMPy's `validate_fmu` must find no problem.
+//! 5. Extract it to `target/fmu/BeamBody/`, load the packaged .so there with the native host
+//!    ([`crate::host`]), run the same scene through the FMI 2.0 API with the built-in law and
+//!    the DefaultExperiment (`target/fmu/paper_fmu.csv`), check that a serialized FMU state
+//!    restores to a bit-identical continuation, and compare with the standalone solver.
 
 use std::fs;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::{Duration, Instant};
 
-use crate::{build_release_binary, project_root, relative, run_cmd, summary, target_dir, Result};
+use beam_body::fmi2::variables::{Var, DEFAULT_EXPERIMENT, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
+use zip::write::SimpleFileOptions;
+use zip::{CompressionMethod, ZipArchive, ZipWriter};
+
+use crate::host::{Fmu2, Status};
+use crate::summary::{sig, Table};
+use crate::{
+    build_release_binary, cargo, docs, model_description, project_root, relative, run_cmd, summary,
+    target_dir, Result,
+};
+
+/// The outputs that the host records and compares, in CSV column order after `t`.
+const RECORDED: [Var; 3] = [Var::V1, Var::Theta1, Var::U2];
+
+/// Checks the modelDescription, builds the cdylib and zips `target/fmu/BeamBody.fmu`.
+/// Returns the .fmu and the library it packaged.
+pub fn build_package() -> Result<(PathBuf, PathBuf)> {
+    model_description::check_fresh()?;
+    let out_dir = target_dir().join("fmu");
+    fs::create_dir_all(&out_dir)
+        .map_err(|err| format!("cannot create {}: {err}", relative(&out_dir)))?;
+    let library = build_library()?;
+    let fmu = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu"));
+    package(&library, &fmu)?;
+    Ok((fmu, library))
+}
 
 pub fn run() -> Result {
+    model_description::check_fresh()?;
+    let out_dir = target_dir().join("fmu");
+    fs::create_dir_all(&out_dir)
+        .map_err(|err| format!("cannot create {}: {err}", relative(&out_dir)))?;
+
+    let reference_csv = run_standalone(&out_dir)?;
+
+    let (fmu, library) = build_package()?;
+    let so_size = fs::metadata(&library)
+        .map_err(|err| format!("cannot stat {}: {err}", relative(&library)))?
+        .len();
+    let fmu_size = fs::metadata(&fmu).map(|m| m.len()).unwrap_or(0);
+    println!("\n{}:", relative(&fmu));
+    println!("  binaries/linux64/{MODEL_IDENTIFIER}.so  {} ({so_size} bytes)", mib(so_size));
+    println!("  {}  {} (zipped)", relative(&fmu), mib(fmu_size));
+
+    validate_with_fmpy(&fmu)?;
+
+    let dir = out_dir.join(MODEL_IDENTIFIER);
+    extract(&fmu, &dir)?;
+    let run = run_fmu(&dir)?;
+    let fmu_csv = out_dir.join("paper_fmu.csv");
+    write_csv(&fmu_csv, &run.rows)?;
+    print_fmu_run(&run, &dir, &fmu_csv);
+    compare(&run.rows, &reference_csv, &fmu_csv)?;
+    match run.state_mismatch {
+        None => Ok(()),
+        Some(err) => Err(err.into()),
+    }
+}
+
+fn mib(bytes: u64) -> String {
+    format!("{:.2} MiB", bytes as f64 / (1024.0 * 1024.0))
+}
+
+/// The standalone solver on the paper's scene: the reference CSV (as before the FMU).
+fn run_standalone(out_dir: &Path) -> Result<PathBuf> {
     let root = project_root();
     let scene = root.join("scenes").join("paper.toml");
     if !scene.is_file() {
         return Err(format!("the paper's scene {} does not exist", relative(&scene)).into());
     }
     let binary = build_release_binary()?;
-
-    let out_dir = target_dir().join("fmu");
-    fs::create_dir_all(&out_dir)
-        .map_err(|err| format!("cannot create {}: {err}", relative(&out_dir)))?;
     let csv = out_dir.join("paper.csv");
-
     // The solver's stderr (its run statistics) goes straight through.
     let mut simulate = Command::new(&binary);
     simulate.arg("simulate").arg(relative(&scene)).arg("-o").arg(relative(&csv)).current_dir(&root);
     run_cmd(&mut simulate)?;
 
-    println!("\n{}:", relative(&csv));
-    summary::print_paper_run(&summary::Table::read(&csv)?)
+    println!("\n{} (standalone solver):", relative(&csv));
+    summary::print_paper_run(&Table::read(&csv)?)?;
+    Ok(csv)
+}
+
+/// `cargo build --release --lib`; returns the cdylib.
+fn build_library() -> Result<PathBuf> {
+    run_cmd(&mut cargo(["build", "--release", "--lib"]))?;
+    let so = target_dir().join("release").join("libbeam_body.so");
+    if !so.is_file() {
+        return Err(format!("the build did not produce {}", relative(&so)).into());
+    }
+    Ok(so)
+}
+
+/// Writes the .fmu. Entries carry no timestamps (the zip crate's default date, 1980-01-01),
+/// so the same inputs give the same archive.
+fn package(library: &Path, fmu: &Path) -> Result {
+    let model_description = fs::read(model_description::path())
+        .map_err(|err| format!("cannot read {}: {err}", model_description::RELATIVE_PATH))?;
+    let binary =
+        fs::read(library).map_err(|err| format!("cannot read {}: {err}", relative(library)))?;
+    let documentation = docs::index_html();
+
+    let file =
+        fs::File::create(fmu).map_err(|err| format!("cannot create {}: {err}", relative(fmu)))?;
+    let mut zip = ZipWriter::new(file);
+    let deflated = SimpleFileOptions::default().compression_method(CompressionMethod::Deflated);
+    let files = deflated.unix_permissions(0o644);
+    let directories = deflated.unix_permissions(0o755);
+    let entries: [(&str, &[u8], SimpleFileOptions); 3] = [
+        ("modelDescription.xml", &model_description, files),
+        (&format!("binaries/{}/{MODEL_IDENTIFIER}.so", Fmu2::PLATFORM), &binary, directories),
+        ("documentation/index.html", documentation.as_bytes(), files),
+    ];
+    let write_all = |zip: &mut ZipWriter<fs::File>| -> zip::result::ZipResult<()> {
+        zip.add_directory("binaries/", directories)?;
+        zip.add_directory(format!("binaries/{}/", Fmu2::PLATFORM), directories)?;
+        zip.add_directory("documentation/", directories)?;
+        for (name, bytes, options) in &entries {
+            zip.start_file(*name, *options)?;
+            zip.write_all(bytes)?;
+        }
+        Ok(())
+    };
+    write_all(&mut zip).map_err(|err| format!("cannot write {}: {err}", relative(fmu)))?;
+    zip.finish().map_err(|err| format!("cannot finish {}: {err}", relative(fmu)))?;
+    Ok(())
+}
+
+/// `fmpy.validation.validate_fmu` on the .fmu (the schema, names, start values, causality and
+/// variability, units, ModelStructure) when the test venv exists; it must find nothing.
+fn validate_with_fmpy(fmu: &Path) -> Result {
+    let python = target_dir().join("venv").join("bin").join("python");
+    if !python.exists() {
+        println!(
+            "  FMPy validation skipped: no {} (`cargo xtask test` creates it)",
+            relative(&python)
+        );
+        return Ok(());
+    }
+    const SCRIPT: &str = "import sys\n\
+        from fmpy.validation import validate_fmu\n\
+        problems = validate_fmu(sys.argv[1])\n\
+        print('\\n'.join(problems))\n\
+        sys.exit(1 if problems else 0)\n";
+    let output = Command::new(&python)
+        .args(["-c", SCRIPT])
+        .arg(fmu)
+        .output()
+        .map_err(|err| format!("cannot run {}: {err}", relative(&python)))?;
+    if output.status.success() {
+        println!("  fmpy.validation.validate_fmu: no problems");
+        Ok(())
+    } else {
+        Err(format!(
+            "fmpy.validation.validate_fmu({}) found problems:\n{}{}",
+            relative(fmu),
+            String::from_utf8_lossy(&output.stdout),
+            String::from_utf8_lossy(&output.stderr)
+        )
+        .into())
+    }
+}
+
+/// Extracts the .fmu into a clean `dir`, which the host then loads: the run uses exactly
+/// the packaged files.
+fn extract(fmu: &Path, dir: &Path) -> Result {
+    if dir.exists() {
+        fs::remove_dir_all(dir).map_err(|err| format!("cannot remove {}: {err}", relative(dir)))?;
+    }
+    let file =
+        fs::File::open(fmu).map_err(|err| format!("cannot open {}: {err}", relative(fmu)))?;
+    let mut archive =
+        ZipArchive::new(file).map_err(|err| format!("{} is not a zip: {err}", relative(fmu)))?;
+    archive
+        .extract(dir)
+        .map_err(|err| format!("cannot extract {} to {}: {err}", relative(fmu), relative(dir)))?;
+    Ok(())
+}
+
+/// What the native host saw.
+struct FmuRun {
+    version: String,
+    types_platform: String,
+    /// t, then the [`RECORDED`] outputs, at every communication point.
+    rows: Vec<[f64; 4]>,
+    steps: usize,
+    /// Instantiate to Terminate of the main run (the state check excluded).
+    wall: Duration,
+    state_bytes: usize,
+    state_time: f64,
+    /// Why the restored continuation differs, if it does.
+    state_mismatch: Option<String>,
+}
+
+/// The communication points: t_k = start + k·h, the last exactly at stop (the standalone
+/// solver's output grid). Each step is t_{k+1} − t_k, which is exact (Sterbenz), so
+/// tc + h lands exactly on the next point.
+fn communication_points(start: f64, stop: f64, h: f64) -> Vec<f64> {
+    let ratio = (stop - start) / h;
+    let n = (ratio - 1e-9).ceil().max(1.0) as usize;
+    (0..=n).map(|k| if k == n { stop } else { start + k as f64 * h }).collect()
+}
+
+fn run_fmu(dir: &Path) -> Result<FmuRun> {
+    let fmu = Fmu2::load(dir)?;
+    let version = fmu.version();
+    let types_platform = fmu.types_platform();
+    if version != "2.0" {
+        return Err(format!("fmi2GetVersion returned {version:?}, not \"2.0\"").into());
+    }
+
+    let ex = DEFAULT_EXPERIMENT;
+    let points = communication_points(ex.start_time, ex.stop_time, ex.step_size);
+    let vrs = RECORDED.map(Var::vr);
+    let law = PHI_SOURCE_TYPE
+        .items
+        .iter()
+        .position(|(name, _)| *name == "law")
+        .ok_or("the PhiSource enumeration has no item `law`")? as i32
+        + 1;
+
+    let started = Instant::now();
+    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, true)?;
+    instance.set_integer(&[Var::PhiSource.vr()], &[law])?;
+    instance.setup_experiment(Some(ex.tolerance), ex.start_time, Some(ex.stop_time))?;
+    instance.enter_initialization_mode()?;
+    instance.exit_initialization_mode()?;
+
+    let read = |instance: &mut crate::host::Instance, t: f64| -> Result<[f64; 4]> {
+        let mut values = [0.0; 3];
+        instance.get_real(&vrs, &mut values)?;
+        Ok([t, values[0], values[1], values[2]])
+    };
+
+    let mid = (points.len() - 1) / 2;
+    let mut rows = vec![read(&mut instance, points[0])?];
+    let mut snapshot = None;
+    for (k, pair) in points.windows(2).enumerate() {
+        if k == mid {
+            let state = instance.get_fmu_state()?;
+            let bytes = instance.serialize_fmu_state(&state)?;
+            instance.free_fmu_state(state)?;
+            snapshot = Some(bytes);
+        }
+        let (tc, h) = (pair[0], pair[1] - pair[0]);
+        step(&mut instance, tc, h)?;
+        rows.push(read(&mut instance, pair[1])?);
+    }
+    let wall = started.elapsed();
+
+    // The FMU state: restore the serialized snapshot and repeat the second half.
+    let bytes = snapshot.ok_or("no FMU state was taken")?;
+    let state = instance.deserialize_fmu_state(&bytes)?;
+    instance.set_fmu_state(&state)?;
+    instance.free_fmu_state(state)?;
+    let mut state_mismatch = None;
+    for (k, pair) in points.windows(2).enumerate().skip(mid) {
+        let (tc, h) = (pair[0], pair[1] - pair[0]);
+        step(&mut instance, tc, h)?;
+        let again = read(&mut instance, pair[1])?;
+        if again.map(f64::to_bits) != rows[k + 1].map(f64::to_bits) && state_mismatch.is_none() {
+            state_mismatch = Some(format!(
+                "after restoring the FMU state serialized at t = {}, the run differs at t = {}: \
+                 {:?} instead of {:?} (t, v1, theta1, u2)",
+                points[mid],
+                pair[1],
+                again,
+                rows[k + 1]
+            ));
+        }
+    }
+    instance.terminate()?;
+    drop(instance);
+
+    Ok(FmuRun {
+        version,
+        types_platform,
+        steps: points.len() - 1,
+        rows,
+        wall,
+        state_bytes: bytes.len(),
+        state_time: points[mid],
+        state_mismatch,
+    })
+}
+
+/// One doStep; a Discard is an error here (the paper's scene must run through).
+fn step(instance: &mut crate::host::Instance, tc: f64, h: f64) -> Result {
+    match instance.do_step(tc, h, false)? {
+        Status::Discard => {
+            let reached = instance.last_successful_time()?;
+            let terminated = instance.terminated()?;
+            Err(format!(
+                "fmi2DoStep({tc}, {h}) returned fmi2Discard: last successful time {reached}, \
+                 terminated {terminated}"
+            )
+            .into())
+        }
+        _ => Ok(()),
+    }
+}
+
+fn write_csv(path: &Path, rows: &[[f64; 4]]) -> Result {
+    let mut text = String::from("t");
+    for var in RECORDED {
+        text.push(',');
+        text.push_str(var.info().name);
+    }
+    text.push('\n');
+    for row in rows {
+        let fields: Vec<String> = row.iter().map(|x| format!("{x:e}")).collect();
+        text.push_str(&fields.join(","));
+        text.push('\n');
+    }
+    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+}
+
+fn print_fmu_run(run: &FmuRun, dir: &Path, csv: &Path) {
+    let so = dir.join("binaries").join(Fmu2::PLATFORM).join(format!("{MODEL_IDENTIFIER}.so"));
+    println!("\n{} (native FMI 2.0 host, {}):", relative(csv), relative(&so));
+    println!("  fmi2GetVersion {}, fmi2GetTypesPlatform {}", run.version, run.types_platform);
+    let ex = DEFAULT_EXPERIMENT;
+    println!(
+        "  steps         {} x fmi2DoStep, h = {} s, t = {} .. {} s, tolerance {:e}, phi_source = law",
+        run.steps, ex.step_size, ex.start_time, ex.stop_time, ex.tolerance
+    );
+    println!(
+        "  wall time     {:.3} s (instantiate to the last step), {:.1} us per step",
+        run.wall.as_secs_f64(),
+        run.wall.as_secs_f64() * 1e6 / run.steps as f64
+    );
+    match &run.state_mismatch {
+        None => println!(
+            "  FMU state     {} bytes serialized at t = {} s; restored, the rest repeats bit for bit",
+            run.state_bytes,
+            sig(run.state_time)
+        ),
+        Some(err) => println!("  FMU state     {} bytes; MISMATCH: {err}", run.state_bytes),
+    }
+}
+
+/// Max |FMU − standalone| of the recorded outputs, on the common time grid.
+fn compare(rows: &[[f64; 4]], reference: &Path, fmu_csv: &Path) -> Result {
+    let table = Table::read(reference)?;
+    let t_ref = table.values("t")?;
+    if t_ref.len() != rows.len() {
+        return Err(format!(
+            "{} has {} rows but the FMU run has {}: the scene and the DefaultExperiment differ",
+            relative(reference),
+            t_ref.len(),
+            rows.len()
+        )
+        .into());
+    }
+    let dt = t_ref.iter().zip(rows).map(|(a, row)| (a - row[0]).abs()).fold(0.0, f64::max);
+    if dt > 1e-9 {
+        return Err(format!(
+            "the output times of {} and {} differ by up to {dt:e} s",
+            relative(reference),
+            relative(fmu_csv)
+        )
+        .into());
+    }
+    println!("  max |FMU - standalone| ({}):", relative(reference));
+    for (column, var) in RECORDED.iter().enumerate() {
+        let info = var.info();
+        let reference = table.values(info.name)?;
+        let (k, diff) = reference
+            .iter()
+            .zip(rows)
+            .map(|(a, row)| (a - row[column + 1]).abs())
+            .enumerate()
+            .fold(
+                (0, 0.0_f64),
+                |best, (k, d)| if d > best.1 || d.is_nan() { (k, d) } else { best },
+            );
+        let unit = match info.ty {
+            beam_body::fmi2::variables::Type::Real { unit: Some(unit), .. } => unit,
+            _ => "",
+        };
+        println!("    {:<8} {:<12} {unit:<4} at t = {}", info.name, sig(diff), sig(rows[k][0]));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::communication_points;
+
+    #[test]
+    fn communication_points_end_exactly_and_steps_add_up() {
+        let points = communication_points(0.0, 10.2, 0.0085);
+        assert_eq!(points.len(), 1201);
+        assert_eq!(points[0], 0.0);
+        assert_eq!(*points.last().unwrap(), 10.2);
+        for (k, pair) in points.windows(2).enumerate() {
+            let h = pair[1] - pair[0];
+            assert!(h > 0.0);
+            assert_eq!(pair[0] + h, pair[1], "step {k}");
+            if k + 1 < 1200 {
+                assert_eq!(pair[1], (k + 1) as f64 * 0.0085);
+            }
+        }
+        assert_eq!(communication_points(0.0, 1.0, 0.3), [0.0, 0.3, 0.6, 0.8999999999999999, 1.0]);
+    }
 }

@@ -1,11 +1,16 @@
 //! Project tasks: `cargo xtask <command>`. See `cargo xtask help`.
 //!
-//! Std only, like rust-analyzer's xtask: this crate must build from a fresh clone in seconds.
+//! Few dependencies, like rust-analyzer's xtask: the interface tables of the library
+//! (`beam_body::fmi2::variables`), quick-xml, zip and libloading (see Cargo.toml for why each).
 
+mod docs;
 mod fmu;
+mod host;
+mod model_description;
 mod python;
 mod summary;
 mod test;
+mod xml;
 
 use std::env;
 use std::error::Error;
@@ -22,8 +27,17 @@ Commands:
   test [--rust-only | --python-only]
           Run the whole test suite: set up the Python venv (target/venv),
           build the release binary, run the Rust tests and the Python tests.
-  fmu     Build the release binary, run the paper's scene (scenes/paper.toml)
-          and summarise the result (target/fmu/paper.csv).
+  gen     Write modelDescription/modelDescription.xml from the interface tables
+          (src/fmi2/variables.rs). Commit the result; a test fails when it is stale.
+  fmu     Build and check the FMU, target/fmu/BeamBody.fmu:
+          - refuse a stale modelDescription.xml;
+          - run the paper's scene (scenes/paper.toml) through the standalone solver,
+            the reference (target/fmu/paper.csv);
+          - build the library (cargo build --release --lib) and zip modelDescription.xml,
+            binaries/linux64/BeamBody.so and documentation/index.html;
+          - validate it with FMPy when target/venv exists;
+          - extract it to target/fmu/BeamBody/, load the .so there with a native FMI 2.0
+            host, run the same scene through it (target/fmu/paper_fmu.csv) and compare.
   help    Print this message.
 ";
 
@@ -49,6 +63,10 @@ fn run(args: &[String]) -> Result {
             Ok(())
         }
         "test" => test::run(test::Scope::parse(options)?),
+        "gen" => {
+            no_options(command, options)?;
+            model_description::run()
+        }
         "fmu" => {
             no_options(command, options)?;
             fmu::run()

@@ -52,6 +52,12 @@ impl Table {
         Ok(Table { columns, rows })
     }
 
+    /// The values of column `name`, in row order.
+    pub fn values(&self, name: &str) -> Result<Vec<f64>> {
+        let column = self.column(name)?;
+        Ok(self.rows.iter().map(|row| row[column]).collect())
+    }
+
     fn column(&self, name: &str) -> Result<usize> {
         self.columns.iter().position(|c| c == name).ok_or_else(|| {
             format!("no column `{name}` in the CSV (it has: {})", self.columns.join(", ")).into()
@@ -96,7 +102,7 @@ pub fn print_paper_run(table: &Table) -> Result {
 }
 
 /// `x` with six significant digits, like C's `%g`.
-fn sig(x: f64) -> String {
+pub fn sig(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return x.to_string();
     }

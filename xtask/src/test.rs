@@ -37,14 +37,15 @@ pub fn run(scope: Scope) -> Result {
     }
     let python = report.step("python venv", python::ensure_venv);
     let binary = report.step("build beam-body (release)", build_release_binary);
+    let fmu = report.step("package BeamBody.fmu", || crate::fmu::build_package().map(|p| p.0));
     if scope == Scope::All {
         report.step("rust tests", rust_tests);
     }
-    match (python, binary) {
-        (Some(python), Some(binary)) => {
-            report.step("python tests", || pytest(&python, &binary));
+    match (python, binary, fmu) {
+        (Some(python), Some(binary), Some(fmu)) => {
+            report.step("python tests", || pytest(&python, &binary, &fmu));
         }
-        _ => report.skip("python tests", "needs the venv and the release binary"),
+        _ => report.skip("python tests", "needs the venv, the release binary and the FMU"),
     }
     report.finish()
 }
@@ -68,11 +69,12 @@ fn nextest_available() -> bool {
         .is_ok_and(|status| status.success())
 }
 
-fn pytest(python: &Path, binary: &Path) -> Result {
+fn pytest(python: &Path, binary: &Path, fmu: &Path) -> Result {
     let root = project_root();
     let mut cmd = Command::new(python);
     cmd.args(["-m", "pytest", "tests/python", "-q", "-ra"])
         .env("BEAM_BODY_BIN", binary)
+        .env("BEAM_BODY_FMU", fmu)
         .env("BEAM_BODY_ROOT", &root)
         .current_dir(&root);
     let status = status_of(&mut cmd)?;

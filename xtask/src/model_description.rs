@@ -1,0 +1,648 @@
+//! `cargo xtask gen`: `modelDescription/modelDescription.xml` from the interface tables in
+//! `beam_body::fmi2::variables`, the single source of truth.
+//!
+//! The file is committed. Two tests keep it honest: it must equal what [`generate`] writes
+//! now, byte for byte, and read back with quick-xml it must say what the tables say.
+//! `cargo xtask fmu` refuses to package a stale file.
+
+use std::fs;
+use std::path::PathBuf;
+
+use beam_body::fmi2::variables::{
+    self as vars, Causality, EnumType, Type, Variability, Variable, CAPABILITIES,
+    DEFAULT_EXPERIMENT, ENUM_TYPES, LOG_CATEGORIES, UNITS, VARIABLES,
+};
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
+use quick_xml::Writer;
+
+use crate::xml::escape_attr;
+use crate::{project_root, relative, Result};
+
+/// The committed file, relative to the project root.
+pub const RELATIVE_PATH: &str = "modelDescription/modelDescription.xml";
+
+pub fn path() -> PathBuf {
+    project_root().join(RELATIVE_PATH)
+}
+
+/// `cargo xtask gen`.
+pub fn run() -> Result {
+    let text = generate()?;
+    let path = path();
+    let old = fs::read_to_string(&path).ok();
+    if old.as_deref() == Some(text.as_str()) {
+        println!("{} is up to date (guid {})", relative(&path), vars::guid());
+        return Ok(());
+    }
+    fs::create_dir_all(path.parent().expect("the path has a directory"))
+        .map_err(|err| format!("cannot create the directory of {}: {err}", relative(&path)))?;
+    fs::write(&path, &text).map_err(|err| format!("cannot write {}: {err}", relative(&path)))?;
+    let verb = if old.is_some() { "updated" } else { "created" };
+    println!("{verb} {} (guid {})", relative(&path), vars::guid());
+    Ok(())
+}
+
+/// The error unless the committed file is exactly what [`generate`] writes now.
+pub fn check_fresh() -> Result {
+    let expected = generate()?;
+    let path = path();
+    match fs::read_to_string(&path) {
+        Ok(actual) if actual == expected => Ok(()),
+        Ok(_) => Err(stale_message().into()),
+        Err(err) => {
+            Err(format!("cannot read {}: {err}; run `cargo xtask gen`", relative(&path)).into())
+        }
+    }
+}
+
+pub fn stale_message() -> String {
+    format!("{RELATIVE_PATH} is stale: run `cargo xtask gen`")
+}
+
+/// A real as the XML writes it: Rust's `Display` of f64, the shortest decimal string that
+/// parses back to the same f64, and never in exponent form ("0.000001", "3.141592653589793"),
+/// which the schema's xs:double accepts. Non-finite values have no place in the tables.
+pub fn real(x: f64) -> Result<String> {
+    if x.is_finite() {
+        Ok(x.to_string())
+    } else {
+        Err(format!("the non-finite value {x} cannot be written to the modelDescription").into())
+    }
+}
+
+fn boolean(b: bool) -> String {
+    b.to_string()
+}
+
+/// `initial` as FMI 2.0 requires it for each causality of ours: parameters are exact (with a
+/// start), outputs are calculated (no start), and the continuous input has none (its start
+/// is implicitly approx).
+pub fn initial(causality: Causality) -> Option<&'static str> {
+    match causality {
+        Causality::Parameter => Some("exact"),
+        Causality::Input => None,
+        Causality::Output => Some("calculated"),
+    }
+}
+
+pub fn causality_name(causality: Causality) -> &'static str {
+    match causality {
+        Causality::Parameter => "parameter",
+        Causality::Input => "input",
+        Causality::Output => "output",
+    }
+}
+
+pub fn variability_name(variability: Variability) -> &'static str {
+    match variability {
+        Variability::Fixed => "fixed",
+        Variability::Continuous => "continuous",
+    }
+}
+
+/// The 1-based `<ModelVariables>` indices of the outputs, for `<ModelStructure>`.
+pub fn output_indices() -> Vec<usize> {
+    VARIABLES
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.causality == Causality::Output)
+        .map(|(row, _)| row + 1)
+        .collect()
+}
+
+/// The rules the tables must follow for the XML to be valid FMI 2.0, checked before writing.
+fn check_rules(v: &Variable) -> Result {
+    let has_start = match v.ty {
+        Type::Real { start, .. } => start.is_some(),
+        _ => true,
+    };
+    let problem = match (v.causality, v.variability, has_start) {
+        (Causality::Parameter, Variability::Fixed, true) => None,
+        (Causality::Parameter, _, _) => Some("a parameter must be fixed and have a start value"),
+        (Causality::Input, Variability::Continuous, true) => match v.ty {
+            Type::Real { .. } => None,
+            _ => Some("a continuous input must be a Real"),
+        },
+        (Causality::Input, _, _) => Some("the input must be continuous and have a start value"),
+        (Causality::Output, Variability::Continuous, false) => match v.ty {
+            Type::Real { .. } => None,
+            _ => Some("a continuous output must be a Real"),
+        },
+        (Causality::Output, _, _) => {
+            Some("an output must be continuous and have no start value (initial = calculated)")
+        }
+    };
+    match problem {
+        None => Ok(()),
+        Some(problem) => Err(format!("variable `{}`: {problem}", v.name).into()),
+    }
+}
+
+/// Attributes, in the order they are written; values unescaped.
+type Attrs = Vec<(&'static str, String)>;
+
+/// quick-xml's indenting writer with attribute lists.
+struct Doc {
+    writer: Writer<Vec<u8>>,
+}
+
+impl Doc {
+    fn new() -> Doc {
+        Doc { writer: Writer::new_with_indent(Vec::new(), b' ', 2) }
+    }
+
+    fn start_tag<'a>(name: &'a str, attrs: &Attrs) -> BytesStart<'a> {
+        let mut start = BytesStart::new(name);
+        for (key, value) in attrs {
+            start.push_attribute((key.as_bytes(), escape_attr(value).as_bytes()));
+        }
+        start
+    }
+
+    fn event(&mut self, event: Event) {
+        // Writing into a Vec cannot fail.
+        self.writer.write_event(event).expect("writing XML into memory");
+    }
+
+    fn empty(&mut self, name: &str, attrs: Attrs) {
+        self.event(Event::Empty(Doc::start_tag(name, &attrs)));
+    }
+
+    fn start(&mut self, name: &str, attrs: Attrs) {
+        self.event(Event::Start(Doc::start_tag(name, &attrs)));
+    }
+
+    fn end(&mut self, name: &str) {
+        self.event(Event::End(BytesEnd::new(name)));
+    }
+
+    fn finish(self) -> String {
+        let mut bytes = self.writer.into_inner();
+        bytes.push(b'\n');
+        String::from_utf8(bytes).expect("the XML is built from UTF-8 strings")
+    }
+}
+
+/// The whole modelDescription.xml.
+pub fn generate() -> Result<String> {
+    for v in VARIABLES {
+        check_rules(v)?;
+    }
+    let mut doc = Doc::new();
+    doc.event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)));
+    doc.start(
+        "fmiModelDescription",
+        vec![
+            ("fmiVersion", "2.0".into()),
+            ("modelName", vars::MODEL_NAME.into()),
+            ("guid", vars::guid().into()),
+            ("description", vars::MODEL_DESCRIPTION.into()),
+            ("generationTool", vars::GENERATION_TOOL.into()),
+            ("variableNamingConvention", "flat".into()),
+            ("numberOfEventIndicators", "0".into()),
+        ],
+    );
+
+    let caps = CAPABILITIES;
+    let mut attrs: Attrs = vec![
+        ("modelIdentifier", vars::MODEL_IDENTIFIER.into()),
+        ("needsExecutionTool", boolean(false)),
+        (
+            "canHandleVariableCommunicationStepSize",
+            boolean(caps.can_handle_variable_communication_step_size),
+        ),
+        ("canInterpolateInputs", boolean(caps.can_interpolate_inputs)),
+    ];
+    if caps.max_output_derivative_order > 0 {
+        attrs.push(("maxOutputDerivativeOrder", caps.max_output_derivative_order.to_string()));
+    }
+    attrs.extend([
+        // sic: FMI 2.0's spelling.
+        ("canRunAsynchronuously", boolean(caps.can_run_asynchronuously)),
+        (
+            "canBeInstantiatedOnlyOncePerProcess",
+            boolean(caps.can_be_instantiated_only_once_per_process),
+        ),
+        (
+            "canNotUseMemoryManagementFunctions",
+            boolean(caps.can_not_use_memory_management_functions),
+        ),
+        ("canGetAndSetFMUstate", boolean(caps.can_get_and_set_fmu_state)),
+        ("canSerializeFMUstate", boolean(caps.can_serialize_fmu_state)),
+        ("providesDirectionalDerivative", boolean(caps.provides_directional_derivative)),
+    ]);
+    doc.empty("CoSimulation", attrs);
+
+    doc.start("UnitDefinitions", vec![]);
+    for unit in UNITS {
+        doc.start("Unit", vec![("name", unit.name.into())]);
+        let exponents = [("kg", unit.kg), ("m", unit.m), ("s", unit.s), ("rad", unit.rad)];
+        doc.empty(
+            "BaseUnit",
+            exponents.iter().filter(|(_, e)| *e != 0).map(|(k, e)| (*k, e.to_string())).collect(),
+        );
+        doc.end("Unit");
+    }
+    doc.end("UnitDefinitions");
+
+    doc.start("TypeDefinitions", vec![]);
+    for ty in ENUM_TYPES {
+        write_enum_type(&mut doc, ty);
+    }
+    doc.end("TypeDefinitions");
+
+    doc.start("LogCategories", vec![]);
+    for (name, description) in LOG_CATEGORIES {
+        doc.empty(
+            "Category",
+            vec![("name", name.to_string()), ("description", description.to_string())],
+        );
+    }
+    doc.end("LogCategories");
+
+    let ex = DEFAULT_EXPERIMENT;
+    doc.empty(
+        "DefaultExperiment",
+        vec![
+            ("startTime", real(ex.start_time)?),
+            ("stopTime", real(ex.stop_time)?),
+            ("tolerance", real(ex.tolerance)?),
+            ("stepSize", real(ex.step_size)?),
+        ],
+    );
+
+    doc.start("ModelVariables", vec![]);
+    for v in VARIABLES {
+        write_variable(&mut doc, v)?;
+    }
+    doc.end("ModelVariables");
+
+    doc.start("ModelStructure", vec![]);
+    for list in ["Outputs", "InitialUnknowns"] {
+        doc.start(list, vec![]);
+        for index in output_indices() {
+            doc.empty("Unknown", vec![("index", index.to_string())]);
+        }
+        doc.end(list);
+    }
+    doc.end("ModelStructure");
+
+    doc.end("fmiModelDescription");
+    Ok(doc.finish())
+}
+
+fn write_enum_type(doc: &mut Doc, ty: &EnumType) {
+    doc.start("SimpleType", vec![("name", ty.name.into()), ("description", ty.description.into())]);
+    doc.start("Enumeration", vec![]);
+    for (k, (name, description)) in ty.items.iter().enumerate() {
+        doc.empty(
+            "Item",
+            vec![
+                ("name", name.to_string()),
+                ("value", (k + 1).to_string()),
+                ("description", description.to_string()),
+            ],
+        );
+    }
+    doc.end("Enumeration");
+    doc.end("SimpleType");
+}
+
+fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
+    let mut attrs: Attrs = vec![
+        ("name", v.name.into()),
+        ("valueReference", v.vr().to_string()),
+        ("description", v.description.into()),
+        ("causality", causality_name(v.causality).into()),
+        ("variability", variability_name(v.variability).into()),
+    ];
+    if let Some(initial) = initial(v.causality) {
+        attrs.push(("initial", initial.into()));
+    }
+    doc.start("ScalarVariable", attrs);
+    match v.ty {
+        Type::Real { unit, start, min, max } => {
+            let mut attrs: Attrs = Vec::new();
+            if let Some(unit) = unit {
+                attrs.push(("unit", unit.into()));
+            }
+            for (key, value) in [("start", start), ("min", min), ("max", max)] {
+                if let Some(value) = value {
+                    attrs.push((key, real(value)?));
+                }
+            }
+            doc.empty("Real", attrs);
+        }
+        Type::Integer { start, min, max } => doc.empty(
+            "Integer",
+            vec![("start", start.to_string()), ("min", min.to_string()), ("max", max.to_string())],
+        ),
+        Type::Enumeration { ty, start } => doc.empty(
+            "Enumeration",
+            vec![("declaredType", ty.name.into()), ("start", start.to_string())],
+        ),
+        Type::Boolean { start } => doc.empty("Boolean", vec![("start", boolean(start))]),
+    }
+    doc.end("ScalarVariable");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    //! The committed file against the tables. The parse-back test reads the file with its own
+    //! reader and compares with the tables directly, not with the generator's code.
+
+    use std::collections::HashMap;
+    use std::fs;
+
+    use beam_body::fmi2::variables::{
+        self as vars, Causality, Type, Variability, CAPABILITIES, DEFAULT_EXPERIMENT, ENUM_TYPES,
+        LOG_CATEGORIES, UNITS, VARIABLES,
+    };
+
+    use super::{generate, path, real, stale_message};
+    use crate::xml::Element;
+
+    fn committed() -> String {
+        let path = path();
+        fs::read_to_string(&path).unwrap_or_else(|err| {
+            panic!("cannot read {}: {err}; run `cargo xtask gen`", path.display())
+        })
+    }
+
+    fn root() -> Element {
+        Element::parse(&committed()).expect("the committed modelDescription.xml parses")
+    }
+
+    /// The attributes of `e` as a map; fails on an attribute outside `allowed`.
+    fn attrs<'a>(e: &'a Element, allowed: &[&str]) -> HashMap<&'a str, &'a str> {
+        for (key, _) in &e.attrs {
+            assert!(
+                allowed.contains(&key.as_str()),
+                "<{}> has an unexpected attribute {key}",
+                e.name
+            );
+        }
+        e.attrs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
+    }
+
+    fn f64_of(text: &str) -> f64 {
+        text.parse().unwrap_or_else(|err| panic!("{text:?} is not a double: {err}"))
+    }
+
+    #[test]
+    fn committed_file_is_fresh() {
+        let expected = generate().expect("the tables follow the FMI rules");
+        if committed() != expected {
+            panic!("{}", stale_message());
+        }
+    }
+
+    #[test]
+    fn reals_round_trip_exactly() {
+        for x in
+            [0.0, -0.0, 2.5, 1e-6, 0.0085, 10.2, std::f64::consts::PI, 1e-300, 1.7e308, 0.1 + 0.2]
+        {
+            let text = real(x).unwrap();
+            assert!(!text.contains('e') && !text.contains("inf"), "{text}");
+            assert_eq!(f64_of(&text).to_bits(), x.to_bits(), "{text}");
+        }
+        assert!(real(f64::NAN).is_err() && real(f64::INFINITY).is_err());
+    }
+
+    #[test]
+    fn header_and_capabilities() {
+        let root = root();
+        assert_eq!(root.name, "fmiModelDescription");
+        let a = attrs(
+            &root,
+            &[
+                "fmiVersion",
+                "modelName",
+                "guid",
+                "description",
+                "generationTool",
+                "variableNamingConvention",
+                "numberOfEventIndicators",
+            ],
+        );
+        assert_eq!(a["fmiVersion"], "2.0");
+        assert_eq!(a["modelName"], vars::MODEL_NAME);
+        assert_eq!(a["guid"], vars::guid());
+        assert_eq!(a["description"], vars::MODEL_DESCRIPTION);
+        assert_eq!(a["generationTool"], vars::GENERATION_TOOL);
+        assert_eq!(a["variableNamingConvention"], "flat");
+        assert_eq!(a["numberOfEventIndicators"], "0");
+
+        let names: Vec<&str> = root.children.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "CoSimulation",
+                "UnitDefinitions",
+                "TypeDefinitions",
+                "LogCategories",
+                "DefaultExperiment",
+                "ModelVariables",
+                "ModelStructure"
+            ]
+        );
+
+        let cs = root.child("CoSimulation").unwrap();
+        assert!(cs.children.is_empty());
+        let a = attrs(
+            cs,
+            &[
+                "modelIdentifier",
+                "needsExecutionTool",
+                "canHandleVariableCommunicationStepSize",
+                "canInterpolateInputs",
+                "maxOutputDerivativeOrder",
+                "canRunAsynchronuously",
+                "canBeInstantiatedOnlyOncePerProcess",
+                "canNotUseMemoryManagementFunctions",
+                "canGetAndSetFMUstate",
+                "canSerializeFMUstate",
+                "providesDirectionalDerivative",
+            ],
+        );
+        let c = CAPABILITIES;
+        let flag = |b: bool| if b { "true" } else { "false" };
+        assert_eq!(a["modelIdentifier"], vars::MODEL_IDENTIFIER);
+        assert_eq!(a["needsExecutionTool"], "false");
+        assert_eq!(
+            a["canHandleVariableCommunicationStepSize"],
+            flag(c.can_handle_variable_communication_step_size)
+        );
+        assert_eq!(a["canInterpolateInputs"], flag(c.can_interpolate_inputs));
+        match a.get("maxOutputDerivativeOrder") {
+            Some(n) => assert_eq!(n.parse::<u32>().unwrap(), c.max_output_derivative_order),
+            None => assert_eq!(c.max_output_derivative_order, 0),
+        }
+        assert_eq!(a["canRunAsynchronuously"], flag(c.can_run_asynchronuously));
+        assert_eq!(
+            a["canBeInstantiatedOnlyOncePerProcess"],
+            flag(c.can_be_instantiated_only_once_per_process)
+        );
+        assert_eq!(
+            a["canNotUseMemoryManagementFunctions"],
+            flag(c.can_not_use_memory_management_functions)
+        );
+        assert_eq!(a["canGetAndSetFMUstate"], flag(c.can_get_and_set_fmu_state));
+        assert_eq!(a["canSerializeFMUstate"], flag(c.can_serialize_fmu_state));
+        assert_eq!(a["providesDirectionalDerivative"], flag(c.provides_directional_derivative));
+    }
+
+    #[test]
+    fn units_types_categories_experiment() {
+        let root = root();
+
+        let units: Vec<&Element> = root.child("UnitDefinitions").unwrap().children.iter().collect();
+        assert_eq!(units.len(), UNITS.len());
+        for (e, unit) in units.iter().zip(UNITS) {
+            assert_eq!(e.name, "Unit");
+            assert_eq!(attrs(e, &["name"])["name"], unit.name);
+            let base = e.child("BaseUnit").unwrap();
+            assert_eq!(e.children.len(), 1);
+            let a = attrs(base, &["kg", "m", "s", "rad"]);
+            for (key, exponent) in
+                [("kg", unit.kg), ("m", unit.m), ("s", unit.s), ("rad", unit.rad)]
+            {
+                let written = a.get(key).map(|x| x.parse::<i32>().unwrap());
+                assert_eq!(written, (exponent != 0).then_some(exponent), "{} {key}", unit.name);
+            }
+        }
+
+        let types = &root.child("TypeDefinitions").unwrap().children;
+        assert_eq!(types.len(), ENUM_TYPES.len());
+        for (e, ty) in types.iter().zip(ENUM_TYPES) {
+            assert_eq!(e.name, "SimpleType");
+            let a = attrs(e, &["name", "description"]);
+            assert_eq!((a["name"], a["description"]), (ty.name, ty.description));
+            assert_eq!(e.children.len(), 1);
+            let items = &e.child("Enumeration").unwrap().children;
+            assert_eq!(items.len(), ty.items.len(), "{}", ty.name);
+            for (k, (item, (name, description))) in items.iter().zip(ty.items).enumerate() {
+                assert_eq!(item.name, "Item");
+                let a = attrs(item, &["name", "value", "description"]);
+                assert_eq!(a["name"], *name);
+                assert_eq!(a["value"].parse::<usize>().unwrap(), k + 1, "{}.{name}", ty.name);
+                assert_eq!(a["description"], *description);
+            }
+        }
+
+        let categories = &root.child("LogCategories").unwrap().children;
+        assert_eq!(categories.len(), LOG_CATEGORIES.len());
+        for (e, (name, description)) in categories.iter().zip(LOG_CATEGORIES) {
+            assert_eq!(e.name, "Category");
+            let a = attrs(e, &["name", "description"]);
+            assert_eq!((a["name"], a["description"]), (*name, *description));
+        }
+
+        let ex = root.child("DefaultExperiment").unwrap();
+        let a = attrs(ex, &["startTime", "stopTime", "tolerance", "stepSize"]);
+        assert_eq!(f64_of(a["startTime"]), DEFAULT_EXPERIMENT.start_time);
+        assert_eq!(f64_of(a["stopTime"]), DEFAULT_EXPERIMENT.stop_time);
+        assert_eq!(f64_of(a["tolerance"]), DEFAULT_EXPERIMENT.tolerance);
+        assert_eq!(f64_of(a["stepSize"]), DEFAULT_EXPERIMENT.step_size);
+    }
+
+    #[test]
+    fn every_scalar_variable_matches_the_table() {
+        let root = root();
+        let elements = &root.child("ModelVariables").unwrap().children;
+        assert_eq!(elements.len(), VARIABLES.len());
+        for (e, v) in elements.iter().zip(VARIABLES) {
+            let at = |what: &str| format!("variable {}: {what}", v.name);
+            assert_eq!(e.name, "ScalarVariable");
+            let a = attrs(
+                e,
+                &["name", "valueReference", "description", "causality", "variability", "initial"],
+            );
+            assert_eq!(a["name"], v.name);
+            assert_eq!(a["valueReference"].parse::<u32>().unwrap(), v.vr(), "{}", at("vr"));
+            assert_eq!(a["description"], v.description, "{}", at("description"));
+
+            let (causality, variability, initial) = match v.causality {
+                Causality::Parameter => ("parameter", "fixed", Some("exact")),
+                Causality::Input => ("input", "continuous", None),
+                Causality::Output => ("output", "continuous", Some("calculated")),
+            };
+            assert_eq!(a["causality"], causality, "{}", at("causality"));
+            assert_eq!(a["variability"], variability, "{}", at("variability"));
+            let table_variability = match v.variability {
+                Variability::Fixed => "fixed",
+                Variability::Continuous => "continuous",
+            };
+            assert_eq!(a["variability"], table_variability, "{}", at("variability"));
+            assert_eq!(a.get("initial").copied(), initial, "{}", at("initial"));
+
+            assert_eq!(e.children.len(), 1, "{}", at("one type element"));
+            let t = &e.children[0];
+            match v.ty {
+                Type::Real { unit, start, min, max } => {
+                    assert_eq!(t.name, "Real", "{}", at("type"));
+                    let a = attrs(t, &["unit", "start", "min", "max"]);
+                    assert_eq!(a.get("unit").copied(), unit, "{}", at("unit"));
+                    for (key, value) in [("start", start), ("min", min), ("max", max)] {
+                        let written = a.get(key).map(|x| f64_of(x).to_bits());
+                        assert_eq!(written, value.map(f64::to_bits), "{}", at(key));
+                    }
+                    match v.causality {
+                        Causality::Output => assert!(start.is_none(), "{}", at("start")),
+                        _ => assert!(start.is_some(), "{}", at("start")),
+                    }
+                }
+                Type::Integer { start, min, max } => {
+                    assert_eq!(t.name, "Integer", "{}", at("type"));
+                    let a = attrs(t, &["start", "min", "max"]);
+                    for (key, value) in [("start", start), ("min", min), ("max", max)] {
+                        assert_eq!(a[key].parse::<i32>().unwrap(), value, "{}", at(key));
+                    }
+                }
+                Type::Enumeration { ty, start } => {
+                    assert_eq!(t.name, "Enumeration", "{}", at("type"));
+                    let a = attrs(t, &["declaredType", "start"]);
+                    assert_eq!(a["declaredType"], ty.name, "{}", at("declaredType"));
+                    assert!(ENUM_TYPES.iter().any(|d| d.name == ty.name), "{}", at("declared"));
+                    let start_value = a["start"].parse::<i32>().unwrap();
+                    assert_eq!(start_value, start, "{}", at("start"));
+                    assert!((1..=ty.items.len() as i32).contains(&start_value), "{}", at("start"));
+                }
+                Type::Boolean { start } => {
+                    assert_eq!(t.name, "Boolean", "{}", at("type"));
+                    let a = attrs(t, &["start"]);
+                    assert_eq!(a["start"], if start { "true" } else { "false" }, "{}", at("start"));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn model_structure_lists_exactly_the_outputs() {
+        let root = root();
+        let outputs: Vec<usize> = VARIABLES
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.causality == Causality::Output)
+            .map(|(row, _)| row + 1)
+            .collect();
+        assert!(!outputs.is_empty());
+        let structure = root.child("ModelStructure").unwrap();
+        let names: Vec<&str> = structure.children.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["Outputs", "InitialUnknowns"]);
+        for list in ["Outputs", "InitialUnknowns"] {
+            let indices: Vec<usize> = structure
+                .child(list)
+                .unwrap()
+                .children
+                .iter()
+                .map(|u| {
+                    assert_eq!(u.name, "Unknown");
+                    attrs(u, &["index"])["index"].parse().unwrap()
+                })
+                .collect();
+            assert_eq!(indices, outputs, "{list}");
+        }
+    }
+}
