@@ -51,6 +51,26 @@ def run_cli(binary: Path, args, stdin_text: str | None = None, timeout: float = 
     return proc.stdout
 
 
+#: The columns of the CLI's CSV output, in order.
+COLUMNS = "t,v1,theta1,u2,dv1,dtheta1,du2,phi,dphi,ddphi,N,P,M,energy,drift".split(",")
+
+
+def read_csv(text: str) -> dict:
+    """The CLI's CSV output as {column: numpy array}; checks the header."""
+    import csv
+    import io
+
+    import numpy as np
+
+    rows = list(csv.reader(io.StringIO(text)))
+    assert rows, "empty CSV"
+    header = [h.strip() for h in rows[0]]
+    assert header == COLUMNS, f"CSV header {header} != {COLUMNS}"
+    data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)
+    assert data.ndim == 2 and data.shape[1] == len(COLUMNS)
+    return {c: data[:, i] for i, c in enumerate(COLUMNS)}
+
+
 def set_args(params: dict) -> list[str]:
     out = []
     for k, v in params.items():
@@ -96,3 +116,46 @@ def write_report(key: str, line: str):
     REPORT_FILE.parent.mkdir(parents=True, exist_ok=True)
     order = [f for f in FORMULATIONS if f in _REPORT] + [k for k in _REPORT if k not in FORMULATIONS]
     REPORT_FILE.write_text("".join(_REPORT[k] + "\n" for k in order))
+
+
+# --------------------------------------------------------------------------------------------------
+# FMU fixtures (tests/python/test_fmu_*.py; helpers in fmu_util.py)
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="session")
+def fmu_file() -> Path:
+    """The FMU: $BEAM_BODY_FMU, else target/fmu/BeamBody.fmu. Missing is a FAILURE, not a skip."""
+    import fmu_util
+
+    path = fmu_util.fmu_path()
+    if not path.is_file():
+        pytest.fail(
+            f"FMU not found at {path} (set BEAM_BODY_FMU or build it): run `cargo xtask fmu` "
+            "(it writes target/fmu/BeamBody.fmu), then `cargo xtask test`",
+            pytrace=False,
+        )
+    return path
+
+
+@pytest.fixture(scope="session")
+def fmu_model_description(fmu_file):
+    from fmpy import read_model_description
+
+    return read_model_description(str(fmu_file), validate=False)
+
+
+@pytest.fixture(scope="session")
+def fmu_unzipdir(fmu_file, tmp_path_factory) -> Path:
+    """The FMU extracted once per session (for fmpy.fmi2.FMU2Slave and simulate_fmu)."""
+    import fmpy
+
+    return Path(fmpy.extract(str(fmu_file), unzipdir=str(tmp_path_factory.mktemp("BeamBody_fmu"))))
+
+
+@pytest.fixture(scope="session")
+def fmu_report():
+    """target/fmu-report.txt: measured figures, one per line, appended per session."""
+    import fmu_util
+
+    return fmu_util.Report()

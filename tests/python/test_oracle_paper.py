@@ -11,9 +11,7 @@ Measured errors are printed (`pytest -s`) and written to target/oracle-report.tx
 
 from __future__ import annotations
 
-import csv
 import hashlib
-import io
 import math
 import os
 import tempfile
@@ -22,9 +20,8 @@ import numpy as np
 import pytest
 
 import oracle
-from conftest import CACHE_DIR, load_toml, run_cli, set_args, write_report
+from conftest import CACHE_DIR, COLUMNS, load_toml, read_csv, run_cli, set_args, write_report
 
-COLUMNS = "t,v1,theta1,u2,dv1,dtheta1,du2,phi,dphi,ddphi,N,P,M,energy,drift".split(",")
 
 METHODS = (("DOP853", 1e-13, 1e-15), ("Radau", 1e-12, 1e-14))
 METHOD_AGREEMENT = 1e-8  # m, rad
@@ -76,16 +73,6 @@ def reference(name: str, scene: dict, methods=METHODS):
         res = (t_grid, Ys)
     _MEMO[key] = res
     return res
-
-
-def read_csv(text: str) -> dict:
-    rows = list(csv.reader(io.StringIO(text)))
-    assert rows, "empty CSV"
-    header = [h.strip() for h in rows[0]]
-    assert header == COLUMNS, f"CSV header {header} != {COLUMNS}"
-    data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)
-    assert data.ndim == 2 and data.shape[1] == len(COLUMNS)
-    return {c: data[:, i] for i, c in enumerate(COLUMNS)}
 
 
 def simulate(beam_body, scene_file, formulation, extra=()):

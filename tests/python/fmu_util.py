@@ -1,0 +1,290 @@
+"""Helpers for the FMU tests (tests/python/test_fmu_*.py).
+
+- the FMU's path ($BEAM_BODY_FMU, else target/fmu/BeamBody.fmu);
+- the paper's law phi(t), evaluated with the same formula and operation order as the Rust model
+  (src/model/phi.rs, PhiPiece::Turn / Hold), so that samples are bit-identical to the CLI's;
+- CLI runs (`beam-body simulate scenes/paper.toml --set ...`), cached per session;
+- `Slave`: a thin wrapper of fmpy.fmi2.FMU2Slave with a logger that collects the FMU's messages;
+- the measured-figure report, target/fmu-report.txt (appended, one block per session).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from ctypes import byref
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+TARGET = REPO / "target"
+FMU_REPORT_FILE = TARGET / "fmu-report.txt"
+MODEL_DESCRIPTION_XML = REPO / "modelDescription" / "modelDescription.xml"
+PAPER_SCENE = REPO / "scenes" / "paper.toml"
+
+STATES = ("v1", "theta1", "u2")
+OUTPUTS = ("v1", "theta1", "u2", "dv1", "dtheta1", "du2", "N", "P", "M", "drift", "energy",
+           "phi_applied", "dphi_applied", "ddphi_applied")
+
+# The paper's scene (scenes/paper.toml and the FMU's DefaultExperiment).
+T_ROT = 0.85
+PHI_END = math.pi
+T_END = 10.2
+H0 = 0.0085
+
+# Enumerations of the modelDescription (src/fmi2/variables.rs).
+FORMULATION_ENUM = {"reduced": 1, "dae": 2, "dae-stabilized": 3, "linear": 4}
+PHI_SOURCE_LAW = 2  # phi_source: 1 = input (the default), 2 = law
+
+# fmi2StatusKind
+FMI2_LAST_SUCCESSFUL_TIME = 2
+FMI2_TERMINATED = 3
+
+
+def fmu_path() -> Path:
+    env = os.environ.get("BEAM_BODY_FMU")
+    return Path(env) if env else TARGET / "fmu" / "BeamBody.fmu"
+
+
+# --------------------------------------------------------------------------------------------------
+# the law
+# --------------------------------------------------------------------------------------------------
+
+
+def law(t: float, t_rot: float = T_ROT, phi_end: float = PHI_END, phi0: float = 0.0):
+    """(phi, dphi, ddphi) of the paper's law at t: phi0 + phi_end*sin^2(pi t/(2 t_rot)) for t < t_rot,
+    phi0 + phi_end after (the piece that starts at t, as PaperLaw::piece_from). Same expression as the
+    Rust code (0.5*phi_end*(1 - cos(w t)), w = pi/t_rot) with libm's sin/cos (math, not numpy), so the
+    values are those the CLI uses."""
+    t = float(t)
+    if t < t_rot:
+        w = math.pi / t_rot
+        s, c = math.sin(w * t), math.cos(w * t)
+        return (phi0 + 0.5 * phi_end * (1.0 - c), 0.5 * phi_end * w * s, 0.5 * phi_end * w * w * c)
+    return (phi0 + phi_end, 0.0, 0.0)
+
+
+def law_sin2(t: np.ndarray) -> np.ndarray:
+    """The law as the paper writes it, pi*sin^2(pi t/(2*0.85)) for t <= 0.85, then pi (a check of law())."""
+    t = np.asarray(t, dtype=float)
+    return np.where(t <= T_ROT, math.pi * np.sin(math.pi * t / (2 * T_ROT)) ** 2, math.pi)
+
+
+def comm_grid(h: float, t_end: float = T_END) -> np.ndarray:
+    """The communication points k*h, k = 0..n, exactly as FMPy's simulate_fmu computes them
+    (start + k*h) and as the CLI's grid does (k*step), with n = round(t_end/h)."""
+    n = int(round(t_end / h))
+    assert abs(n * h - t_end) <= 1e-9 * t_end, f"{t_end} is not a multiple of {h}"
+    return np.arange(n + 1, dtype=float) * h
+
+
+def law_table(h: float, t_end: float = T_END) -> np.ndarray:
+    """The input table for simulate_fmu: ('time', 'phi') exactly on the communication grid, so FMPy's
+    linear interpolation returns the sample itself at every communication point."""
+    t = comm_grid(h, t_end)
+    phi = np.array([law(x)[0] for x in t])
+    return np.array(list(zip(t, phi)), dtype=[("time", np.float64), ("phi", np.float64)])
+
+
+# --------------------------------------------------------------------------------------------------
+# CLI
+# --------------------------------------------------------------------------------------------------
+
+
+_CLI_CACHE: dict = {}
+
+
+def cli(binary: Path, **sets) -> dict:
+    """`beam-body simulate scenes/paper.toml --set k=v ...` as columns; memoised per session."""
+    from conftest import read_csv, run_cli  # the CLI runner: a non-zero exit fails the test
+
+    key = tuple(sorted((k, str(v)) for k, v in sets.items()))
+    if key not in _CLI_CACHE:
+        args = ["simulate", str(PAPER_SCENE)]
+        for k, v in sets.items():
+            args += ["--set", f"{k}={v!r}" if isinstance(v, float) else f"{k}={v}"]
+        _CLI_CACHE[key] = read_csv(run_cli(binary, args))
+    return _CLI_CACHE[key]
+
+
+# --------------------------------------------------------------------------------------------------
+# FMU2Slave
+# --------------------------------------------------------------------------------------------------
+
+# FMPy's logger proxy (fmpy/logging, native/src/logging/logging.c in FMPy's sources) formats the FMU's
+# printf-style message in C and forwards it to ONE process-global Python logger, `static s_logger`, which
+# every addLoggerProxy() call replaces, for every callbacks struct (FMPy's defaultCallbacks included).
+# If that Python callback is garbage-collected (simulate_fmu(logger=...) drops its own when it returns),
+# the next message any FMU logs jumps to freed memory: a segfault. So the tests point s_logger at one
+# permanent dispatcher, which routes messages by instance name, and re-install it after every
+# simulate_fmu(logger=...) (install_logger_proxy).
+_ROUTES: dict[str, list] = {}
+UNROUTED: list = []
+
+
+def _dispatch(env, instance_name, status, category, message):
+    name = (instance_name or b"").decode("utf-8", "replace")
+    record = (
+        name,
+        int(status),
+        (category or b"").decode("utf-8", "replace"),
+        (message or b"").decode("utf-8", "replace"),
+    )
+    sink = _ROUTES.get(name)
+    if sink is not None:
+        sink.append(record)
+    else:
+        UNROUTED.append(record)
+        print(f"[status {record[1]}] {name}: {record[3]}")
+
+
+_PERMANENT_LOGGER = None
+
+
+def _permanent_logger():
+    global _PERMANENT_LOGGER
+    if _PERMANENT_LOGGER is None:
+        from fmpy.fmi2 import fmi2CallbackLoggerTYPE
+
+        _PERMANENT_LOGGER = fmi2CallbackLoggerTYPE(_dispatch)  # module global: never freed
+    return _PERMANENT_LOGGER
+
+
+def install_logger_proxy():
+    """Points FMPy's global logger proxy at the permanent dispatcher (see above)."""
+    from fmpy.fmi2 import fmi2CallbackFunctions
+    from fmpy.logging import addLoggerProxy
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = _permanent_logger()
+    addLoggerProxy(byref(cb))
+
+
+class Slave:
+    """An instance of the FMU through fmpy.fmi2.FMU2Slave. Its log messages
+    (instanceName, status, category, message) are collected in `messages` (routed by instance name,
+    which must be unique among live instances)."""
+
+    def __init__(self, unzipdir, model_description, name="instance", logging_on=False):
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (
+            FMU2Slave,
+            fmi2CallbackAllocateMemoryTYPE,
+            fmi2CallbackFreeMemoryTYPE,
+            fmi2CallbackFunctions,
+        )
+        from fmpy.logging import addLoggerProxy
+
+        assert name not in _ROUTES, f"instance name {name!r} is in use"
+        self.name = name
+        self.md = model_description
+        self.vr = {v.name: v.valueReference for v in model_description.modelVariables}
+        self.messages: list[tuple[str, int, str, str]] = []
+        _ROUTES[name] = self.messages
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = _permanent_logger()
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(cb))  # s_logger = the dispatcher; cb.logger = the C proxy
+        self._callbacks = cb  # the FMU keeps a pointer to it: keep it alive
+        self.freed = False
+        self.fmu = FMU2Slave(
+            guid=model_description.guid,
+            unzipDirectory=str(unzipdir),
+            modelIdentifier=model_description.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        try:
+            self.fmu.instantiate(callbacks=cb, loggingOn=logging_on)
+        except Exception:
+            del _ROUTES[name]
+            raise
+
+    # -- set-up ------------------------------------------------------------------------------------
+
+    def start(self, tolerance=None, start_time=0.0, stop_time=None, integers=None, reals=None, phi0=None):
+        """setupExperiment, parameters, enterInitializationMode, (phi), exitInitializationMode."""
+        f = self.fmu
+        f.setupExperiment(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
+        for name, value in (integers or {}).items():
+            f.setInteger([self.vr[name]], [int(value)])
+        for name, value in (reals or {}).items():
+            f.setReal([self.vr[name]], [float(value)])
+        f.enterInitializationMode()
+        if phi0 is not None:
+            f.setReal([self.vr["phi"]], [float(phi0)])
+        f.exitInitializationMode()
+        return self
+
+    # -- stepping ----------------------------------------------------------------------------------
+
+    def get(self, names=OUTPUTS) -> list[float]:
+        return self.fmu.getReal([self.vr[n] for n in names])
+
+    def step_input(self, tc, h, phi, dphi=None, ddphi=None):
+        """setReal(phi) [+ setRealInputDerivatives orders 1 and 2], doStep(tc, h)."""
+        f, vr = self.fmu, self.vr["phi"]
+        f.setReal([vr], [phi])
+        if dphi is not None:
+            f.setRealInputDerivatives([vr], [1], [dphi])
+        if ddphi is not None:
+            f.setRealInputDerivatives([vr], [2], [ddphi])
+        f.doStep(tc, h)
+
+    def free(self):
+        if not self.freed:
+            self.freed = True
+            try:
+                self.fmu.freeInstance()
+            finally:
+                if _ROUTES.get(self.name) is self.messages:
+                    del _ROUTES[self.name]
+
+    def errors(self, min_status=2):
+        return [m for m in self.messages if m[1] >= min_status]
+
+
+def run_derivatives(slave: Slave, times, names=OUTPUTS, phi_fn=law) -> np.ndarray:
+    """Steps an input-mode instance sending phi, phi', phi'' of phi_fn at each tc."""
+    out = []
+    for a, b in zip(times[:-1], times[1:]):
+        p, dp, ddp = phi_fn(a)
+        slave.step_input(a, b - a, p, dp, ddp)
+        out.append(slave.get(names))
+    return np.array(out)
+
+
+# --------------------------------------------------------------------------------------------------
+# report
+# --------------------------------------------------------------------------------------------------
+
+
+class Report:
+    """target/fmu-report.txt: a '# session <time>' line, then one line per measured figure,
+    `<test> <name> = <value> [<comment>]`, appended as soon as it is measured."""
+
+    def __init__(self, path: Path = FMU_REPORT_FILE):
+        self.path = path
+        self.started = False
+
+    def _write(self, line: str):
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        with open(self.path, "a", encoding="utf-8") as fh:
+            if not self.started:
+                self.started = True
+                fh.write(f"# session {time.strftime('%Y-%m-%d %H:%M:%S')} fmu={fmu_path()}\n")
+            fh.write(line.rstrip("\n") + "\n")
+
+    def figure(self, test: str, name: str, value, comment: str = ""):
+        v = f"{value:.3e}" if isinstance(value, float) else str(value)
+        line = f"{test} {name} = {v}" + (f"  # {comment}" if comment else "")
+        print(line)
+        self._write(line)
+
+    def note(self, test: str, text: str):
+        line = f"{test} # {text}"
+        print(line)
+        self._write(line)

@@ -1,0 +1,63 @@
+"""The FMU's interface: FMPy's validation, the packaged modelDescription.xml, the capability flags.
+
+Figures go to target/fmu-report.txt (fmu_report fixture).
+"""
+
+from __future__ import annotations
+
+import zipfile
+
+import fmpy.validation
+from fmpy import read_model_description
+
+from fmu_util import MODEL_DESCRIPTION_XML
+
+
+def test_validate_fmu_reports_no_problem(fmu_file, fmu_report):
+    problems = fmpy.validation.validate_fmu(str(fmu_file))
+    fmu_report.figure("interface", "validate_fmu_problems", len(problems))
+    assert problems == [], "fmpy.validation.validate_fmu found problems:\n" + "\n".join(problems)
+
+
+def test_packaged_model_description_is_the_committed_one(fmu_file):
+    assert MODEL_DESCRIPTION_XML.is_file(), f"{MODEL_DESCRIPTION_XML} is missing: run `cargo xtask gen`"
+    with zipfile.ZipFile(fmu_file) as z:
+        names = z.namelist()
+        assert "modelDescription.xml" in names
+        assert "binaries/linux64/BeamBody.so" in names, f"no binaries/linux64/BeamBody.so in {names}"
+        packaged = z.read("modelDescription.xml")
+    committed = MODEL_DESCRIPTION_XML.read_bytes()
+    assert packaged == committed, (
+        "the FMU's modelDescription.xml differs from the committed modelDescription/modelDescription.xml: "
+        "rebuild the FMU (`cargo xtask fmu`) or regenerate the file (`cargo xtask gen`)"
+    )
+
+
+def test_capability_flags_and_default_experiment(fmu_file):
+    md = read_model_description(str(fmu_file))
+    assert md.fmiVersion == "2.0"
+    assert md.modelExchange is None, "the FMU provides co-simulation only"
+    cs = md.coSimulation
+    assert cs is not None and cs.modelIdentifier == "BeamBody"
+    flags = {
+        "canHandleVariableCommunicationStepSize": True,
+        "canInterpolateInputs": True,
+        "canGetAndSetFMUstate": True,
+        "canSerializeFMUstate": True,
+        "canNotUseMemoryManagementFunctions": True,
+    }
+    for name, expected in flags.items():
+        assert getattr(cs, name) is expected, f"<CoSimulation {name}> is {getattr(cs, name)!r}, expected {expected}"
+    ex = md.defaultExperiment
+    assert ex is not None
+    got = tuple(float(x) for x in (ex.startTime, ex.stopTime, ex.tolerance, ex.stepSize))  # strings in FMPy
+    assert got == (0.0, 10.2, 1e-6, 0.0085), f"DefaultExperiment (start, stop, tolerance, step) = {got}"
+    # The variables the other tests use, with their enumerations (src/fmi2/variables.rs).
+    by_name = {v.name: v for v in md.modelVariables}
+    assert by_name["phi"].causality == "input" and by_name["phi"].type == "Real"
+    for out in ("v1", "theta1", "u2", "drift", "phi_applied", "dphi_applied", "ddphi_applied"):
+        assert by_name[out].causality == "output", out
+    assert [i.name for i in by_name["formulation"].declaredType.items] == ["reduced", "dae", "dae_stabilized", "linear"]
+    assert [i.value for i in by_name["formulation"].declaredType.items] == ["1", "2", "3", "4"]
+    assert [i.name for i in by_name["phi_source"].declaredType.items] == ["input", "law"]
+    assert by_name["phi_source"].start == "1" and by_name["phi_extrapolation"].start == "3"
