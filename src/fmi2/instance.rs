@@ -942,6 +942,7 @@ impl Instance {
         let values = self.core.values;
         let Core { run, history, pending, .. } = &mut self.core;
         let run = run.as_mut().expect("stepComplete has an integrator");
+        let previous = run.piece();
         let result = match values.phi_source {
             PhiSource::Law => run.advance_law(&values.law, target, target),
             PhiSource::Input => {
@@ -966,6 +967,14 @@ impl Instance {
                     .and_then(|()| run.advance(target, target))
             }
         };
+        let result = result.map_err(|e| {
+            if run.t() <= tc {
+                // No step was accepted: the outputs at tc are those of the piece that got
+                // there, not of the rejected one (whose φ'' may be absurd).
+                run.set_piece(previous, false).expect("without a restart nothing can fail");
+            }
+            (e, run.t())
+        });
         self.core.cache = None;
         match result {
             Ok(()) => {
@@ -973,8 +982,7 @@ impl Instance {
                 self.core.last_successful_time = target;
                 Status::Ok
             }
-            Err(e) => {
-                let t = run_time(&self.core);
+            Err((e, t)) => {
                 self.core.time = t;
                 self.core.last_successful_time = t;
                 self.core.terminated = true;
@@ -1109,11 +1117,6 @@ impl Instance {
             .map(Box::new)
             .map_err(|e| self.fail(Status::Error, format!("{F}: {e}")))
     }
-}
-
-/// The integrator's time, or the communication time before it exists.
-fn run_time(core: &Core) -> f64 {
-    core.run.as_ref().map_or(core.time, Run::t)
 }
 
 #[cfg(test)]
