@@ -793,3 +793,39 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 ) -> fmi2Status {
     guard(c, "fmi2GetStringStatus", |inst| inst.get_unprovided_status("fmi2GetStringStatus", s))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmi2::instance::State;
+    use std::sync::{Arc, Mutex as StdMutex};
+
+    /// A panic inside an exported body is caught: the call returns fmi2Fatal, the panic is
+    /// logged, the instance refuses everything after, and it can still be freed.
+    #[test]
+    fn a_panic_is_caught_logged_and_makes_the_instance_fatal() {
+        let log = Arc::new(StdMutex::new(Vec::<(Status, String)>::new()));
+        let sink = log.clone();
+        let logger: Logger = Box::new(move |s, _, m| sink.lock().unwrap().push((s, m.to_string())));
+        let guid = crate::fmi2::variables::guid();
+        let inst = Instance::instantiate("panicky", 1, guid, logger, false).unwrap();
+        let c = Box::into_raw(Box::new(inst)) as fmi2Component;
+        with_registry(|r| r.instances.insert(c as usize));
+
+        let status = guard(c, "fmi2Test", |_| panic!("boom"));
+        assert_eq!(status, Status::Fatal as fmi2Status);
+        // SAFETY: `c` is registered and not in use elsewhere.
+        assert_eq!(unsafe { instance(c) }.unwrap().state(), State::Fatal);
+        let last = log.lock().unwrap().last().cloned().unwrap();
+        assert_eq!(last.0, Status::Fatal);
+        assert!(last.1.contains("fmi2Test") && last.1.contains("boom"), "{}", last.1);
+
+        // SAFETY: valid instance; the calls check their state first.
+        unsafe {
+            assert_eq!(fmi2Reset(c), Status::Error as fmi2Status);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.1, 0), Status::Error as fmi2Status);
+            fmi2FreeInstance(c);
+            assert_eq!(fmi2Reset(c), Status::Error as fmi2Status, "freed: refused");
+        }
+    }
+}
