@@ -15,8 +15,9 @@ pub const MODEL_IDENTIFIER: &str = "BeamBody";
 pub const MODEL_NAME: &str = "BeamBody";
 pub const MODEL_DESCRIPTION: &str = "Inextensible elastic cantilever beam (Ritz, 2 coordinates) \
 with a heavy rigid body hinged at its tip and turned through a large angle phi(t); \
-Russkikh & Shklyarchuk (2020). Three formulations: constraints exact (eq. 15), DAE with the \
-inextensibility constraint (eq. 20-21), linearised (eq. 16).";
+Russkikh & Shklyarchuk (2020). The paper's three formulations: constraints exact (eq. 15), DAE \
+with the inextensibility constraint (eq. 20-21), linearised (eq. 16); and the DAE projected onto \
+the constraint.";
 pub const GENERATION_TOOL: &str = concat!("beam-body ", env!("CARGO_PKG_VERSION"));
 
 /// `<DefaultExperiment>`: the paper's scene (12 turn periods T = 0.85 s, its output step).

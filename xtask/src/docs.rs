@@ -165,9 +165,12 @@ pub fn index_html() -> String {
          ½ phi''(tc)(t − tc)² (a derivative not sent counts as 0). Derivatives apply to the \
          next step only; they must be sent again for every step.</li>\n\
          <li><code>{source} = {input_name}</code> ({input}), values only (what most hosts \
-         send, FMPy's <code>simulate_fmu</code> among them): the FMU takes phi over a step, and \
-         its derivatives, from the polynomial of degree <code>{extrapolation}</code> (default \
-         {degree}) through the last input values.</li>\n\
+         send, FMPy's <code>simulate_fmu</code> among them): the polynomial of degree \
+         <code>{extrapolation}</code> (default {degree}) through the last input values gives a \
+         value and a slope at the end of the step; over the step the FMU uses the cubic from the \
+         current phi and phi' to that target. phi and phi' stay continuous from step to step, \
+         and the error falls at second order or better with the communication step. The run \
+         starts with phi' = 0.</li>\n\
          <li><code>{source} = {law_name}</code> ({law}): the paper's law, \
          phi_end·sin²(π t / (2 t_rot)) for t ≤ t_rot, then phi_end (parameters \
          <code>t_rot</code> and <code>phi_end</code>); the input is ignored.</li>\n\
