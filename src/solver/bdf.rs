@@ -707,7 +707,7 @@ impl<const N: usize> Bdf<N> {
     }
 
     fn set_coeffs(&mut self) {
-        self.coeffs = bdf_coeffs(self.q, self.h, &self.tau, self.qwait == 1);
+        self.coeffs = bdf_coeffs(&self.coeffs, self.q, self.h, &self.tau, self.qwait == 1);
         self.gamma = self.h / self.coeffs.l[1];
     }
 
@@ -886,10 +886,14 @@ impl<const N: usize> Bdf<N> {
         let q = self.q;
         let (mut q_next, mut eta) = (q, 1.0);
         if self.eta_max > 1.0 {
-            let eta_same = step_ratio(BIAS_SAME, dsm, q + 1);
             if self.qwait != 0 {
-                eta = eta_same;
+                // Only a growth by ETA_THRESHOLD or more changes the step. Below
+                // (BIAS_SAME·dsm > (1/ETA_THRESHOLD − ADDON)^(q+1)) the ratio need not be
+                // computed: this saves a powf in most steps.
+                let grows = BIAS_SAME * dsm <= (1.0 / ETA_THRESHOLD - ADDON).powi(q as i32 + 1);
+                eta = if grows { step_ratio(BIAS_SAME, dsm, q + 1) } else { 1.0 };
             } else {
+                let eta_same = step_ratio(BIAS_SAME, dsm, q + 1);
                 self.qwait = 2;
                 let eta_down = if q > 1 {
                     let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];

@@ -31,6 +31,12 @@ pub(crate) struct StepCoeffs {
     /// tq[5] rescales a saved correction to the current step. tq[1] and tq[3] are computed
     /// only when an order change is being considered. Index 0 and 4 are unused.
     pub tq: [f64; NCOL],
+    /// What they were computed from: the order (0: nothing yet), whether tq[1] and tq[3]
+    /// were computed, and the ratios ξ. [`bdf_coeffs`] reuses them for the same order and
+    /// ratios, as over a run of equal steps.
+    pub key_q: usize,
+    pub key_order_change: bool,
+    pub key_xi: [f64; NCOL + 1],
 }
 
 impl StepCoeffs {
@@ -42,6 +48,13 @@ impl StepCoeffs {
         for x in &mut self.tq {
             v.real("coeffs.tq", x);
         }
+        let mut q = self.key_q as u64;
+        v.count("coeffs.key_q", &mut q);
+        self.key_q = usize::try_from(q).unwrap_or(usize::MAX);
+        v.flag("coeffs.key_order_change", &mut self.key_order_change);
+        for x in &mut self.key_xi {
+            v.real("coeffs.key_xi", x);
+        }
     }
 
     /// l is finite. tq is not negative: its entries are absolute values or 0. They may be
@@ -51,7 +64,20 @@ impl StepCoeffs {
     /// so the stored ones never influence a later step.
     pub(crate) fn check(&self) -> Result<(), SolverError> {
         require_finite(&self.l, "coeffs.l")?;
-        require_not_below_zero(&self.tq, "coeffs.tq")
+        require_not_below_zero(&self.tq, "coeffs.tq")?;
+        if self.key_q > QMAX {
+            return Err(SolverError::InvalidState { field: "coeffs.key_q" });
+        }
+        require_finite(&self.key_xi, "coeffs.key_xi")?;
+        // Coefficients that would be reused must be the ones their key gives.
+        if self.key_q > 0
+            && (self.key_xi[1] != 1.0
+                || self.key_xi[1..=self.key_q + 1].iter().any(|x| !(*x >= 1.0))
+                || !same(self, &coeffs_from_xi(self.key_q, &self.key_xi, self.key_order_change)))
+        {
+            return Err(SolverError::InvalidState { field: "coeffs" });
+        }
+        Ok(())
     }
 }
 
@@ -67,10 +93,18 @@ fn xi_ratios(q: usize, h: f64, tau: &[f64; NCOL + 1]) -> [f64; NCOL + 1] {
     xi
 }
 
-/// Coefficients of the order-q step of size h after the steps `tau`.
+/// Bitwise equality of the coefficients (NaN entries included), keys aside.
+fn same(a: &StepCoeffs, b: &StepCoeffs) -> bool {
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    bits(&a.l) == bits(&b.l) && bits(&a.tq) == bits(&b.tq)
+}
+
+/// Coefficients of the order-q step of size h after the steps `tau`: those of `prev` when
+/// they were computed for the same order, ratios ξ and `order_change`, else new ones.
 ///
 /// `order_change` asks for tq[1] and tq[3], which need one more past step.
 pub(crate) fn bdf_coeffs(
+    prev: &StepCoeffs,
     q: usize,
     h: f64,
     tau: &[f64; NCOL + 1],
@@ -78,6 +112,16 @@ pub(crate) fn bdf_coeffs(
 ) -> StepCoeffs {
     debug_assert!((1..=QMAX).contains(&q));
     let xi = xi_ratios(q, h, tau);
+    // Coefficients computed with tq[1] and tq[3] serve a step that does not need them: the
+    // order change is considered every other step, so this keeps the cache warm.
+    if prev.key_q == q && prev.key_xi == xi && (prev.key_order_change || !order_change) {
+        return *prev;
+    }
+    coeffs_from_xi(q, &xi, order_change)
+}
+
+/// The coefficients for order q and ratios ξ (see [`bdf_coeffs`]).
+fn coeffs_from_xi(q: usize, xi: &[f64; NCOL + 1], order_change: bool) -> StepCoeffs {
     let qf = q as f64;
 
     // Λ(x) = Π_{j=1}^{q−1} (1 + x/ξ_j) · (1 + x/ξ*): the l_j are its coefficients.
@@ -119,7 +163,7 @@ pub(crate) fn bdf_coeffs(
         let c_next = (1.0 - a6 + a5) / a2;
         tq[3] = (c_next / (inv_xi_next * (qf + 2.0) * a5)).abs();
     }
-    StepCoeffs { l, tq }
+    StepCoeffs { l, tq, key_q: q, key_order_change: order_change, key_xi: *xi }
 }
 
 /// Raises the order from q to q+1 after an accepted step of order q: fills z_{q+1} from the
@@ -196,12 +240,12 @@ mod tests {
     #[test]
     fn constant_step_l_vectors() {
         let tau = [0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
-        let c1 = bdf_coeffs(1, 1.0, &tau, false);
+        let c1 = bdf_coeffs(&StepCoeffs::default(), 1, 1.0, &tau, false);
         assert_eq!(&c1.l[..2], &[1.0, 1.0]);
-        let c2 = bdf_coeffs(2, 1.0, &tau, false);
+        let c2 = bdf_coeffs(&StepCoeffs::default(), 2, 1.0, &tau, false);
         // Normalised so that l_0 = 1: BDF2 gives (1, 3/2, 1/2), BDF3 (1, 11/6, 1, 1/6).
         assert!((c2.l[1] - 1.5).abs() < 1e-15 && (c2.l[2] - 0.5).abs() < 1e-15);
-        let c3 = bdf_coeffs(3, 1.0, &tau, false);
+        let c3 = bdf_coeffs(&StepCoeffs::default(), 3, 1.0, &tau, false);
         assert!((c3.l[1] - 11.0 / 6.0).abs() < 1e-15);
         assert!((c3.l[2] - 1.0).abs() < 1e-15);
         assert!((c3.l[3] - 1.0 / 6.0).abs() < 1e-15);
@@ -212,7 +256,7 @@ mod tests {
     fn leading_coefficient_is_fixed() {
         let tau = [0.0, 0.7, 1.3, 0.4, 2.0, 0.9, 1.1];
         for q in 1..=QMAX {
-            let c = bdf_coeffs(q, 0.5, &tau, true);
+            let c = bdf_coeffs(&StepCoeffs::default(), q, 0.5, &tau, true);
             let want: f64 = (1..=q).map(|j| 1.0 / j as f64).sum();
             assert!((c.l[1] - want).abs() < 1e-14, "q = {q}");
             assert_eq!(c.l[0], 1.0);
