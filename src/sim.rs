@@ -512,6 +512,28 @@ impl Run {
         })
     }
 
+    /// The state at `t` inside the last step (dense output) into `out`: (v1, ϑ1, v̇1, ϑ̇1),
+    /// or (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2) for the DAE formulations (projected when stabilised, as
+    /// the outputs are). Returns the number of states written. Cheaper than
+    /// [`outputs_at`](Self::outputs_at), which also computes accelerations, reactions and
+    /// energy; the benchmark records this, as the other solvers record their states.
+    pub fn state_at(&self, t: f64, out: &mut [f64; 6]) -> Result<usize, SolverError> {
+        match &self.bdf {
+            Integrator::Two(b) => {
+                out[..4].copy_from_slice(b.interpolate(t)?.as_slice());
+                Ok(4)
+            }
+            Integrator::Dae(b) => {
+                let mut y = b.interpolate(t)?;
+                if self.formulation == Formulation::DaeStabilized {
+                    y = self.dae().consistent(&y);
+                }
+                out.copy_from_slice(y.as_slice());
+                Ok(6)
+            }
+        }
+    }
+
     /// Visits the integrator's state ([`Bdf::visit_state`]); the model, formulation and
     /// settings are the caller's to restore.
     pub fn visit_state(&mut self, v: &mut impl StateVisitor) {
@@ -563,5 +585,33 @@ mod tests {
         assert!(s.set("formulation", "dae-stabilized").is_ok());
         assert!(s.set("formulation", "quantum").is_err());
         assert!(s.set("max_order", "6").is_err());
+    }
+
+    #[test]
+    fn state_at_matches_the_outputs() {
+        for formulation in Formulation::ALL {
+            let scene = Scene { formulation, ..Scene::default() };
+            let model = scene.validate().unwrap();
+            let law = scene.law;
+            let mut run = Run::new(
+                model,
+                formulation,
+                &scene.solver,
+                0.0,
+                scene.initial,
+                law.piece_from(0.0),
+            )
+            .unwrap();
+            run.advance_law(&law, 0.5, 1.0).unwrap();
+            let o = run.outputs_at(0.5).unwrap();
+            let mut y = [0.0; 6];
+            let n = run.state_at(0.5, &mut y).unwrap();
+            let want: Vec<f64> = if formulation.is_dae() {
+                vec![o.v1, o.theta1, o.u2, o.dv1, o.dtheta1, o.du2]
+            } else {
+                vec![o.v1, o.theta1, o.dv1, o.dtheta1]
+            };
+            assert_eq!(&y[..n], &want[..], "{formulation}");
+        }
     }
 }

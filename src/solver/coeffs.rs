@@ -72,7 +72,7 @@ impl StepCoeffs {
         // Coefficients that would be reused must be the ones their key gives.
         if self.key_q > 0
             && (self.key_xi[1] != 1.0
-                || self.key_xi[1..=self.key_q + 1].iter().any(|x| !(*x >= 1.0))
+                || self.key_xi[1..=self.key_q + 1].iter().any(|x| *x < 1.0)
                 || !same(self, &coeffs_from_xi(self.key_q, &self.key_xi, self.key_order_change)))
         {
             return Err(SolverError::InvalidState { field: "coeffs" });
