@@ -389,10 +389,16 @@ impl<const N: usize> Bdf<N> {
                 conv_fail = ConvFail::Other;
                 continue;
             }
+            // Projection (CVODE's cvDoProjection): the Nordsieck array takes the projected
+            // solution, and the error test measures the local error estimate projected onto
+            // the manifold (CVODE's default, CVodeSetProjErrEst), here as P(y + e) − P(y):
+            // the normal part of the correction is not an error of the step.
+            let mut projected_error = None;
             if let Some(yp) = sys.project(self.t, &(self.zn[0] + self.acor)) {
+                projected_error = sys.project(self.t, &(yp + self.acor)).map(|y| y - yp);
                 self.acor = yp - self.zn[0];
             }
-            let dsm = self.wrms(&self.acor) * self.coeffs.tq[2];
+            let dsm = self.wrms(projected_error.as_ref().unwrap_or(&self.acor)) * self.coeffs.tq[2];
             if dsm <= 1.0 || self.cfg.fixed_step.is_some() {
                 break dsm;
             }

@@ -14,7 +14,8 @@ pub trait OdeSystem<const N: usize> {
     /// Projection onto an invariant manifold (constraint stabilisation after each accepted
     /// step, the pattern of CVODE's `CVodeSetProjFn`). `None` (the default) means no
     /// projection. The projected point must be close to `y`: the difference is added to the
-    /// step's correction and enters its error test.
+    /// step's correction. The error test uses the error estimate e projected as
+    /// P(P(y) + e) − P(y), so it should be smooth near the manifold.
     fn project(&self, _t: f64, _y: &SVector<f64, N>) -> Option<SVector<f64, N>> {
         None
     }
