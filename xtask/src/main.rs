@@ -1,8 +1,10 @@
 //! Project tasks: `cargo xtask <command>`. See `cargo xtask help`.
 //!
 //! Few dependencies, like rust-analyzer's xtask: the interface tables of the library
-//! (`beam_body::fmi2::variables`), quick-xml, zip and libloading (see Cargo.toml for why each).
+//! (`beam_body::fmi2::variables`), quick-xml, zip, libloading and nalgebra, and diffsol with
+//! the feature `bench` only (see Cargo.toml for why each).
 
+mod bench;
 mod docs;
 mod fmu;
 mod host;
@@ -38,6 +40,25 @@ Commands:
           - validate it with FMPy when target/venv exists;
           - extract it to target/fmu/BeamBody/, load the .so there with a native FMI 2.0
             host, run the same scene through it (target/fmu/paper_fmu.csv) and compare.
+  bench [--quick]
+          The work-precision benchmark (error against run time, target/bench/):
+          - set up target/venv with xtask/python/requirements-bench.txt, package the
+            FMU, install SUNDIALS' runtime libraries with apt-get when missing (root);
+          - write the cases (target/bench/cases.csv): solvers bdf, bdf-fixed, cvode,
+            diffsol, fmu, scipy-bdf, scipy-radau, scipy-lsoda on the scenes paper,
+            paper-dae, paper-dae-stabilized and stiff;
+          - compute the reference solutions once (cached in target/bench/ref/);
+          - a warm-up round, then 10 timed rounds (3 with --quick), each running every
+            Rust case in one release process and every SciPy case in one Python process,
+            in a shuffled order;
+          - write work_precision.csv, .png and .md, and copy the figure and the table
+            to docs/.
+          --quick: fewer tolerances and steps and 3 rounds (a few minutes).
+  bench-run --round K
+          One round of the benchmark's Rust cases (used by `bench`, in a release build
+          with --features bench): run the cases of target/bench/cases.csv in an order
+          shuffled with seed K and append to target/bench/raw.csv; round 0 (the warm-up)
+          also writes the solutions (target/bench/sol/) and target/bench/costs.csv.
   help    Print this message.
 ";
 
@@ -71,6 +92,8 @@ fn run(args: &[String]) -> Result {
             no_options(command, options)?;
             fmu::run()
         }
+        "bench" => bench::run(bench::Mode::parse(options)?),
+        "bench-run" => bench::run_round(bench::parse_round(options)?),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }

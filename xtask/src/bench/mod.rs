@@ -1,0 +1,807 @@
+//! `cargo xtask bench [--quick]`: the work-precision benchmark (error against run time), and
+//! `bench-run --round K`, one round of its Rust cases.
+//!
+//! Every solver runs the same scenes ([`problem::SCENES`]) on the same output grid
+//! (t_k = k·0.01 s), with atol = 1e-3·rtol. Files, all under `target/bench/`:
+//! - `cases.csv` (`solver,scene,rtol,h`): written here, read by both runners. The rtol and h
+//!   texts are the cases' names: `raw.csv` and the `sol/` file names repeat them verbatim.
+//! - `raw.csv` (`round,solver,scene,rtol,h,time_s,steps,rejected,rhs_evals,jac_evals,
+//!   lu_factorizations,newton_iters,status`): one row per case and round, appended by
+//!   `bench-run` (the Rust solvers) and `xtask/python/bench_scipy.py` (SciPy).
+//! - `sol/<solver>__<scene>__<rtol>__<h>.csv` (`-` for an empty field): the solution on the
+//!   grid, written in round 0, the warm-up.
+//! - `costs.csv` (`scene,rhs_ns,lu_ns,solve_ns`): written by `bench-run` in round 0.
+//! - `ref/` (the reference solutions, `xtask/python/bench_reference.py`) and the outputs
+//!   `work_precision.{csv,png,md}` (`xtask/python/bench_report.py`).
+//!
+//! Timing: a warm-up round 0, then R timed rounds (10; 3 with `--quick`). In each round all
+//! Rust cases run in one release process in an order shuffled with seed = round, then all
+//! SciPy cases in one Python process. `time_s` is the wall time of one complete solve
+//! (`Instant` around the call): building the solver, both segments of the law, and the grid
+//! values; not the file I/O. There is no per-case time limit (a solve runs in-process), so
+//! the case list holds only cases that finish in seconds.
+
+mod cvode;
+#[cfg(feature = "bench")]
+mod diffsol;
+mod fmu;
+mod ours;
+pub mod problem;
+mod sundials_build;
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::fs;
+use std::hint::black_box;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use beam_body::model::{BeamBody, DaeSystem, Formulation, TwoDofSystem};
+use beam_body::solver::OdeSystem;
+use nalgebra::{SMatrix, SVector};
+
+use crate::{cargo, project_root, python, relative, run_cmd, target_dir, Result};
+use problem::{state_names, Counters, Outcome, Problem, SCENES};
+
+/// The solvers that `bench-run` runs in-process.
+const RUST_SOLVERS: [&str; 5] = ["bdf", "bdf-fixed", "fmu", "cvode", "diffsol"];
+/// The solvers of `xtask/python/bench_scipy.py`.
+const SCIPY_SOLVERS: [&str; 3] = ["scipy-bdf", "scipy-radau", "scipy-lsoda"];
+
+const CASES_HEADER: &str = "solver,scene,rtol,h";
+const RAW_HEADER: &str = "round,solver,scene,rtol,h,time_s,steps,rejected,rhs_evals,jac_evals,\
+                          lu_factorizations,newton_iters,status";
+const COSTS_HEADER: &str = "scene,rhs_ns,lu_ns,solve_ns";
+
+/// The full benchmark or the quick one.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    Full,
+    Quick,
+}
+
+impl Mode {
+    pub fn parse(options: &[String]) -> Result<Mode> {
+        match options {
+            [] => Ok(Mode::Full),
+            [option] if option == "--quick" => Ok(Mode::Quick),
+            [option, ..] => Err(format!("`bench` has no option `{option}` (only --quick)").into()),
+        }
+    }
+
+    /// The time limit of one SciPy solve (`bench_scipy.py --max-seconds`).
+    fn scipy_max_seconds(self) -> u32 {
+        match self {
+            Mode::Full => 60,
+            Mode::Quick => 20,
+        }
+    }
+
+    /// Timed rounds after the warm-up.
+    fn rounds(self) -> u64 {
+        match self {
+            Mode::Full => 10,
+            Mode::Quick => 3,
+        }
+    }
+}
+
+/// `--round K` of `bench-run`.
+pub fn parse_round(options: &[String]) -> Result<u64> {
+    match options {
+        [flag, k] if flag == "--round" => {
+            k.parse().map_err(|_| format!("`--round {k}`: not a round number").into())
+        }
+        _ => Err("usage: bench-run --round K".into()),
+    }
+}
+
+fn bench_dir() -> PathBuf {
+    target_dir().join("bench")
+}
+
+fn create_dir(dir: &Path) -> Result {
+    fs::create_dir_all(dir).map_err(|err| format!("cannot create {}: {err}", relative(dir)).into())
+}
+
+// ---------------------------------------------------------------------------------------
+// The cases.
+
+/// One case: a solver on a scene at a tolerance or a step. The texts are as in `cases.csv`.
+#[derive(Clone, Debug, PartialEq)]
+struct Case {
+    solver: String,
+    scene: String,
+    /// Empty for `bdf-fixed`.
+    rtol: String,
+    /// The fixed step (`bdf-fixed`) or the communication step (`fmu`); empty otherwise.
+    h: String,
+}
+
+impl Case {
+    fn new(solver: &str, scene: &str, rtol: &str, h: &str) -> Case {
+        Case { solver: solver.into(), scene: scene.into(), rtol: rtol.into(), h: h.into() }
+    }
+
+    fn is_rust(&self) -> bool {
+        RUST_SOLVERS.contains(&self.solver.as_str())
+    }
+
+    fn is_scipy(&self) -> bool {
+        SCIPY_SOLVERS.contains(&self.solver.as_str())
+    }
+
+    /// `sol/<solver>__<scene>__<rtol>__<h>.csv`, `-` for an empty field.
+    fn solution_file(&self) -> PathBuf {
+        let dash = |s: &str| if s.is_empty() { "-".to_string() } else { s.to_string() };
+        bench_dir().join("sol").join(format!(
+            "{}__{}__{}__{}.csv",
+            self.solver,
+            self.scene,
+            dash(&self.rtol),
+            dash(&self.h)
+        ))
+    }
+
+    fn label(&self) -> String {
+        let mut label = format!("{} {}", self.solver, self.scene);
+        if !self.rtol.is_empty() {
+            label.push_str(&format!(" rtol={}", self.rtol));
+        }
+        if !self.h.is_empty() {
+            label.push_str(&format!(" h={}", self.h));
+        }
+        label
+    }
+}
+
+/// 10^(−3 − k/2): exact decades as literals ("1e-4"), half decades as the shortest text
+/// that reads back to the same double ("3.1622776601683795e-4").
+fn half_decade(k: u32) -> String {
+    // Not `is_multiple_of`: the workspace's rust-version is 1.80.
+    if k % 2 == 1 {
+        format!("{:e}", 10f64.powf(-3.0 - f64::from(k) / 2.0))
+    } else {
+        format!("1e-{}", 3 + k / 2)
+    }
+}
+
+/// The case list of a mode.
+///
+/// - `bdf`, `cvode`, `diffsol`: every scene, rtol 1e-3 … 1e-10 in half decades (quick: 1e-4,
+///   1e-6, 1e-8).
+/// - `bdf-fixed`: paper and stiff, the paper's Δτ = 1e-3, 1e-4, 1e-5 in τ = t/T with
+///   T = t_rot = 0.85 s, i.e. h = 8.5e-4, 8.5e-5, 8.5e-6 s (quick: the first two).
+/// - `fmu`: paper, communication step H = 1e-2, 1e-3, 1e-4 s × rtol 1e-4, 1e-6, 1e-8 (quick:
+///   H = 1e-2, 1e-3 at rtol 1e-6).
+/// - `scipy-*`: a Python right-hand side costs tens of µs per call (a solve of the paper's
+///   scene takes 0.3–2 s at rtol 1e-6, against 1 ms for `bdf`), so SciPy gets fewer cases:
+///   the paper's scenes at rtol 1e-3 … 1e-8 (quick: 1e-4, 1e-6); the stiff scene, where every
+///   solver needs ~10⁵ steps (8 s for LSODA at rtol 1e-4, minutes for BDF and Radau), at
+///   1e-3, 3.2e-4, 1e-4 only, and not at all in the quick run. A SciPy case that takes more
+///   than [`Mode::scipy_max_seconds`] is aborted and not run again (bench_scipy.py).
+fn cases(mode: Mode) -> Vec<Case> {
+    let texts = |list: &[&str]| list.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let (tight, scipy, scipy_stiff, fixed, fmu) = match mode {
+        Mode::Full => (
+            (0..15).map(half_decade).collect(),
+            (0..11).map(half_decade).collect(),
+            (0..3).map(half_decade).collect(),
+            texts(&["8.5e-4", "8.5e-5", "8.5e-6"]),
+            ["1e-4", "1e-6", "1e-8"]
+                .iter()
+                .flat_map(|r| ["1e-2", "1e-3", "1e-4"].map(|h| (*r, h)))
+                .collect(),
+        ),
+        Mode::Quick => (
+            texts(&["1e-4", "1e-6", "1e-8"]),
+            texts(&["1e-4", "1e-6"]),
+            vec![],
+            texts(&["8.5e-4", "8.5e-5"]),
+            vec![("1e-6", "1e-2"), ("1e-6", "1e-3")],
+        ),
+    };
+    let mut list = Vec::new();
+    for (scene, _, _) in SCENES {
+        for solver in ["bdf", "cvode", "diffsol"] {
+            list.extend(tight.iter().map(|rtol| Case::new(solver, scene, rtol, "")));
+        }
+        if scene == "paper" || scene == "stiff" {
+            list.extend(fixed.iter().map(|h| Case::new("bdf-fixed", scene, "", h)));
+        }
+        if scene == "paper" {
+            list.extend(fmu.iter().map(|(rtol, h)| Case::new("fmu", scene, rtol, h)));
+        }
+        let scipy = if scene == "stiff" { &scipy_stiff } else { &scipy };
+        for solver in SCIPY_SOLVERS {
+            list.extend(scipy.iter().map(|rtol| Case::new(solver, scene, rtol, "")));
+        }
+    }
+    list
+}
+
+fn write_cases(path: &Path, cases: &[Case]) -> Result {
+    let mut text = format!("{CASES_HEADER}\n");
+    for c in cases {
+        writeln!(text, "{},{},{},{}", c.solver, c.scene, c.rtol, c.h).expect("String");
+    }
+    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+}
+
+fn read_cases(path: &Path) -> Result<Vec<Case>> {
+    let text = fs::read_to_string(path).map_err(|err| {
+        format!("cannot read {}: {err} (`cargo xtask bench` writes it)", relative(path))
+    })?;
+    let mut lines = text.lines();
+    if lines.next().map(str::trim) != Some(CASES_HEADER) {
+        return Err(format!("{}: the header is not `{CASES_HEADER}`", relative(path)).into());
+    }
+    let mut cases = Vec::new();
+    for (i, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let [solver, scene, rtol, h] = fields[..] else {
+            return Err(format!("{}:{}: expected 4 fields: {line}", relative(path), i + 2).into());
+        };
+        cases.push(Case::new(solver, scene, rtol, h));
+    }
+    Ok(cases)
+}
+
+// ---------------------------------------------------------------------------------------
+// `cargo xtask bench`.
+
+pub fn run(mode: Mode) -> Result {
+    let started = Instant::now();
+    let dir = bench_dir();
+    create_dir(&dir)?;
+    let root = project_root();
+
+    // Setup: the venv, the FMU, SUNDIALS, the release build. Not part of the timed phases.
+    let python = python::ensure_venv()?;
+    let requirements = root.join("xtask").join("python").join("requirements-bench.txt");
+    if requirements.is_file() {
+        let mut pip = Command::new(&python);
+        pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
+            .arg(relative(&requirements))
+            .current_dir(&root);
+        run_cmd(&mut pip)?;
+    } else {
+        eprintln!("warning: no {}: not installing the report's packages", relative(&requirements));
+    }
+    let fmu_dir = fmu::prepare()?;
+    eprintln!("FMU extracted to {}", relative(&fmu_dir));
+    let cvode_lib = optimized_cvode();
+    let cvode = cvode_lib.is_some() || ensure_sundials();
+    // The CLI (the reference script's second method) and the release runner of the rounds:
+    // the binary that `cargo run --release -p xtask --features bench -- bench-run` runs, built
+    // once so that cargo's checks stay out of the rounds.
+    crate::build_release_binary()?;
+    run_cmd(&mut cargo(["build", "--release", "-p", "xtask", "--features", "bench"]))?;
+    let runner = target_dir().join("release").join("xtask");
+
+    let cases = cases(mode);
+    let cases_csv = dir.join("cases.csv");
+    write_cases(&cases_csv, &cases)?;
+    let n_rust = cases.iter().filter(|c| c.is_rust()).count();
+    let n_scipy = cases.iter().filter(|c| c.is_scipy()).count();
+    println!(
+        "{}: {} cases ({n_rust} Rust, {n_scipy} SciPy); cvode {}",
+        relative(&cases_csv),
+        cases.len(),
+        if cvode { "available" } else { "UNAVAILABLE (its cases will fail)" }
+    );
+    // A fresh run: the raw timings and the solutions of the previous one go.
+    for stale in [dir.join("raw.csv"), dir.join("costs.csv")] {
+        if stale.exists() {
+            fs::remove_file(&stale)
+                .map_err(|err| format!("cannot remove {}: {err}", relative(&stale)))?;
+        }
+    }
+    let sol = dir.join("sol");
+    if sol.exists() {
+        fs::remove_dir_all(&sol)
+            .map_err(|err| format!("cannot remove {}: {err}", relative(&sol)))?;
+    }
+    let setup = started.elapsed();
+
+    // The reference solutions (cached by the script).
+    let phase = Instant::now();
+    let scripts = root.join("xtask").join("python");
+    let script = |name: &str| -> Option<PathBuf> {
+        let path = scripts.join(name);
+        if path.is_file() {
+            Some(path)
+        } else {
+            eprintln!("warning: no {}: skipped", relative(&path));
+            None
+        }
+    };
+    if let Some(reference) = script("bench_reference.py") {
+        run_cmd(Command::new(&python).arg(relative(&reference)).current_dir(&root))?;
+    }
+    let reference_time = phase.elapsed();
+
+    // Round 0 (warm-up, solutions, costs), then the timed rounds.
+    let scipy_script = script("bench_scipy.py");
+    let rounds = mode.rounds();
+    let max_seconds = mode.scipy_max_seconds().to_string();
+    let phase = Instant::now();
+    for round in 0..=rounds {
+        let round_text = round.to_string();
+        let t = Instant::now();
+        let mut rust_round = Command::new(&runner);
+        rust_round.args(["bench-run", "--round", &round_text]).current_dir(&root);
+        if let Some(lib) = &cvode_lib {
+            rust_round.env(CVODE_LIB_VARIABLE, lib);
+        }
+        run_cmd(&mut rust_round)?;
+        let rust = t.elapsed();
+        let t = Instant::now();
+        if let Some(scipy) = &scipy_script {
+            run_cmd(
+                Command::new(&python)
+                    .arg(relative(scipy))
+                    .args(["--round", &round_text, "--max-seconds", &max_seconds])
+                    .current_dir(&root),
+            )?;
+        }
+        let scipy = t.elapsed();
+        let name = if round == 0 {
+            "round 0 (warm-up)".to_string()
+        } else {
+            format!("round {round}/{rounds}")
+        };
+        println!(
+            "{name}: {n_rust} Rust cases {:.1} s, {n_scipy} scipy cases {:.1} s",
+            rust.as_secs_f64(),
+            scipy.as_secs_f64()
+        );
+    }
+    let rounds_time = phase.elapsed();
+
+    let phase = Instant::now();
+    if let Some(report) = script("bench_report.py") {
+        run_cmd(Command::new(&python).arg(relative(&report)).current_dir(&root))?;
+    }
+    let report_time = phase.elapsed();
+
+    println!("\nOutputs:");
+    for name in ["work_precision.csv", "work_precision.png", "work_precision.md"] {
+        let path = dir.join(name);
+        let mark = if path.exists() { "" } else { "  (missing)" };
+        println!("  {}{mark}", relative(&path));
+    }
+    for name in ["work_precision.png", "work_precision.md"] {
+        let path = root.join("docs").join(name);
+        let mark = if path.exists() { "" } else { "  (missing)" };
+        println!("  {}{mark}", relative(&path));
+    }
+    println!(
+        "  raw data: {}, {}, sol/, ref/",
+        relative(&dir.join("raw.csv")),
+        relative(&dir.join("costs.csv"))
+    );
+    let secs = Duration::as_secs_f64;
+    println!(
+        "\nTime: setup {:.1} s, reference {:.1} s, rounds {:.1} s ({} + warm-up), report {:.1} s; \
+         benchmark (reference excluded) {:.1} s, total {:.1} s",
+        secs(&setup),
+        secs(&reference_time),
+        secs(&rounds_time),
+        rounds,
+        secs(&report_time),
+        secs(&(rounds_time + report_time)),
+        secs(&started.elapsed()),
+    );
+    Ok(())
+}
+
+/// The variable that names the CVODE library `cvode.rs` loads (Debian's when unset).
+const CVODE_LIB_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
+
+/// The CVODE library of the `cvode` cases: the one named by `BEAM_BODY_CVODE_LIB` if set,
+/// else an optimised build from source ([`sundials_build`]); `None` (Debian's library, see
+/// [`ensure_sundials`]) when that build fails.
+fn optimized_cvode() -> Option<PathBuf> {
+    if let Some(lib) = std::env::var_os(CVODE_LIB_VARIABLE) {
+        eprintln!("cvode: {CVODE_LIB_VARIABLE} = {}", PathBuf::from(&lib).display());
+        return Some(lib.into());
+    }
+    match sundials_build::ensure_optimized_cvode(&target_dir()) {
+        Ok(lib) => {
+            eprintln!("cvode: {}", relative(&lib));
+            Some(lib)
+        }
+        Err(err) => {
+            eprintln!("warning: no optimised CVODE ({err}); the cvode cases use Debian's library");
+            None
+        }
+    }
+}
+
+/// Makes sure SUNDIALS' runtime libraries (CVODE, IDA, the serial vector, the dense matrix
+/// and solver) are installed: on Debian as root, `apt-get install` them when
+/// `libsundials_cvode.so.6` is missing. Returns whether CVODE's library is there; a failed
+/// installation is reported and the benchmark goes on (the cvode cases then fail, each with
+/// its reason in raw.csv).
+fn ensure_sundials() -> bool {
+    const LIBRARY: &str = "/usr/lib/x86_64-linux-gnu/libsundials_cvode.so.6";
+    const PACKAGES: [&str; 5] = [
+        "libsundials-cvode6",
+        "libsundials-nvecserial6",
+        "libsundials-sunlinsol3",
+        "libsundials-sunmatrix4",
+        "libsundials-ida6",
+    ];
+    if Path::new(LIBRARY).exists() {
+        return true;
+    }
+    let root = Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.trim_ascii() == b"0");
+    let apt = Command::new("apt-get").arg("--version").output().is_ok_and(|o| o.status.success());
+    if !(root && apt) {
+        eprintln!(
+            "warning: {LIBRARY} is missing and cannot be installed here (needs root and apt-get): \
+             install {} for the cvode cases",
+            PACKAGES.join(" ")
+        );
+        return false;
+    }
+    eprintln!("{LIBRARY} is missing: installing SUNDIALS' runtime libraries with apt-get");
+    let install = || {
+        let mut cmd = Command::new("apt-get");
+        cmd.args(["install", "-y", "--no-install-recommends"])
+            .args(PACKAGES)
+            .env("DEBIAN_FRONTEND", "noninteractive");
+        run_cmd(&mut cmd)
+    };
+    // The package lists of a fresh container are empty: update them once if need be.
+    let installed = install().is_ok()
+        || (run_cmd(Command::new("apt-get").arg("update")).is_ok() && install().is_ok());
+    if !installed || !Path::new(LIBRARY).exists() {
+        eprintln!("warning: could not install SUNDIALS; the cvode cases will fail");
+        return false;
+    }
+    true
+}
+
+// ---------------------------------------------------------------------------------------
+// `bench-run --round K`.
+
+pub fn run_round(round: u64) -> Result {
+    let dir = bench_dir();
+    let all = read_cases(&dir.join("cases.csv"))?;
+    let mut cases: Vec<Case> = all.into_iter().filter(Case::is_rust).collect();
+    shuffle(&mut cases, round);
+
+    let mut problems: HashMap<String, std::result::Result<Problem, String>> = HashMap::new();
+    for case in &cases {
+        problems.entry(case.scene.clone()).or_insert_with(|| problem::problem(&case.scene));
+    }
+    let fmu = if cases.iter().any(|c| c.solver == "fmu") {
+        Some(fmu::load(&fmu::extracted_dir()))
+    } else {
+        None
+    };
+
+    let warm_up = round == 0;
+    // CVODE's library is loaded at its first use: here, before the timed solves.
+    if cases.iter().any(|c| c.solver == "cvode") {
+        match cvode::describe() {
+            Ok(text) if warm_up => eprintln!("cvode: {text}"),
+            Ok(_) => {}
+            Err(err) => eprintln!("cvode unavailable: {err}"),
+        }
+    }
+    if warm_up {
+        create_dir(&dir.join("sol"))?;
+    }
+    let raw_path = dir.join("raw.csv");
+    let new_file = !raw_path.exists();
+    let mut raw = fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&raw_path)
+        .map_err(|err| format!("cannot open {}: {err}", relative(&raw_path)))?;
+    if new_file {
+        writeln!(raw, "{RAW_HEADER}").map_err(|err| format!("{}: {err}", relative(&raw_path)))?;
+    }
+
+    let (mut failed, mut total) = (0, Duration::ZERO);
+    for case in &cases {
+        let problem = problems.get(&case.scene).expect("every scene was loaded");
+        let (time, result) = match problem {
+            Ok(problem) => timed_solve(case, problem, fmu.as_ref()),
+            Err(err) => (Duration::ZERO, Err(err.clone())),
+        };
+        total += time;
+        let status = match &result {
+            Ok(_) => "ok".to_string(),
+            Err(err) => {
+                failed += 1;
+                err.replace([',', '\n', '\r'], ";")
+            }
+        };
+        let counters = result.as_ref().map(|o| o.counters).unwrap_or_default();
+        writeln!(raw, "{}", raw_row(round, case, time, &counters, &status))
+            .map_err(|err| format!("{}: {err}", relative(&raw_path)))?;
+        if warm_up {
+            match (&result, problem) {
+                (Ok(outcome), Ok(problem)) => {
+                    write_solution(&case.solution_file(), problem, outcome)?;
+                    eprintln!("  {:<50} {:>9.4} s", case.label(), time.as_secs_f64());
+                }
+                _ => eprintln!("  {:<50} FAILED: {status}", case.label()),
+            }
+        } else if result.is_err() {
+            eprintln!("  {}: FAILED: {status}", case.label());
+        }
+    }
+    eprintln!(
+        "bench-run round {round}: {} Rust cases ({failed} failed), {:.2} s of solves",
+        cases.len(),
+        total.as_secs_f64()
+    );
+
+    if warm_up {
+        let mut scenes: Vec<&str> = cases.iter().map(|c| c.scene.as_str()).collect();
+        scenes.sort_unstable();
+        scenes.dedup();
+        write_costs(&dir.join("costs.csv"), &scenes)?;
+    }
+    Ok(())
+}
+
+/// Runs one case, timing the solve alone (the case's numbers are parsed before).
+fn timed_solve(
+    case: &Case,
+    problem: &Problem,
+    fmu: Option<&std::result::Result<crate::host::Fmu2, String>>,
+) -> (Duration, std::result::Result<Outcome, String>) {
+    let number = |name: &str, text: &str| -> std::result::Result<f64, String> {
+        text.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .ok_or_else(|| format!("{name} `{text}` is not a positive number"))
+    };
+    let rtol = || number("rtol", &case.rtol);
+    let h = || number("h", &case.h);
+    let start = Instant::now();
+    let result = match case.solver.as_str() {
+        "bdf" => rtol().and_then(|rtol| ours::bdf(problem, rtol)),
+        "bdf-fixed" => h().and_then(|h| ours::bdf_fixed(problem, h)),
+        "fmu" => match fmu {
+            Some(Ok(fmu)) => {
+                rtol().and_then(|rtol| h().and_then(|h| fmu::run(fmu, problem, rtol, h)))
+            }
+            Some(Err(err)) => Err(err.clone()),
+            None => Err("the FMU was not loaded".into()),
+        },
+        "cvode" => rtol().and_then(|rtol| cvode::run(problem, rtol)),
+        "diffsol" => rtol().and_then(|rtol| diffsol::run(problem, rtol)),
+        other => Err(format!("unknown solver `{other}`")),
+    };
+    let time = start.elapsed();
+    let result = result.and_then(|outcome| check_outcome(problem, outcome));
+    (time, result)
+}
+
+/// `diffsol` is compiled only with the feature `bench` (its crate is an optional dependency).
+#[cfg(not(feature = "bench"))]
+mod diffsol {
+    use super::problem::{Outcome, Problem};
+
+    pub fn run(_problem: &Problem, _rtol: f64) -> Result<Outcome, String> {
+        Err("diffsol is built only with --features bench".into())
+    }
+}
+
+/// A solution must have one finite row of the right width per grid time.
+fn check_outcome(problem: &Problem, outcome: Outcome) -> std::result::Result<Outcome, String> {
+    let width = state_names(problem.scene.formulation).len();
+    if outcome.states.len() != problem.grid.len() {
+        return Err(format!("{} rows for {} grid times", outcome.states.len(), problem.grid.len()));
+    }
+    for (row, t) in outcome.states.iter().zip(&problem.grid) {
+        if row.len() != width {
+            return Err(format!("{} states at t = {t} instead of {width}", row.len()));
+        }
+        if !row.iter().all(|x| x.is_finite()) {
+            return Err(format!("a non-finite state at t = {t}"));
+        }
+    }
+    Ok(outcome)
+}
+
+fn raw_row(round: u64, case: &Case, time: Duration, c: &Counters, status: &str) -> String {
+    let count = |x: Option<u64>| x.map(|n| n.to_string()).unwrap_or_default();
+    format!(
+        "{round},{},{},{},{},{:e},{},{},{},{},{},{},{status}",
+        case.solver,
+        case.scene,
+        case.rtol,
+        case.h,
+        time.as_secs_f64(),
+        count(c.steps),
+        count(c.rejected),
+        count(c.rhs_evals),
+        count(c.jac_evals),
+        count(c.lu_factorizations),
+        count(c.newton_iters),
+    )
+}
+
+fn write_solution(path: &Path, problem: &Problem, outcome: &Outcome) -> Result {
+    let mut text = String::from("t");
+    for name in state_names(problem.scene.formulation) {
+        text.push(',');
+        text.push_str(name);
+    }
+    text.push('\n');
+    for (t, row) in problem.grid.iter().zip(&outcome.states) {
+        write!(text, "{t:e}").expect("String");
+        for x in row {
+            write!(text, ",{x:e}").expect("String");
+        }
+        text.push('\n');
+    }
+    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+}
+
+/// Fisher–Yates with SplitMix64 seeded by the round: a different, reproducible order in every
+/// round.
+fn shuffle<T>(items: &mut [T], seed: u64) {
+    let mut state = seed;
+    let mut next = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    for i in (1..items.len()).rev() {
+        let j = (next() % (i as u64 + 1)) as usize;
+        items.swap(i, j);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// costs.csv: the price of one right-hand side, one LU factorisation and one LU solve.
+
+/// Repetitions per timed batch, and batches: 2·10⁵ repetitions per quantity; the cost is the
+/// median over the batches of the time per repetition (one `Instant` pair per batch, so
+/// its ~25 ns do not count).
+const BATCH: u32 = 1000;
+const BATCHES: usize = 200;
+
+fn median_ns(mut f: impl FnMut()) -> f64 {
+    for _ in 0..BATCH {
+        f();
+    }
+    let mut per_call: Vec<f64> = (0..BATCHES)
+        .map(|_| {
+            let start = Instant::now();
+            for _ in 0..BATCH {
+                f();
+            }
+            start.elapsed().as_secs_f64() * 1e9 / f64::from(BATCH)
+        })
+        .collect();
+    per_call.sort_by(f64::total_cmp);
+    per_call[BATCHES / 2]
+}
+
+/// For each scene: f at a state mid-run (t = 5 s, after the turn, with the law's piece
+/// there) and, on the Newton matrix I − γJ of that state (J by forward differences, γ = 1e-3),
+/// nalgebra's LU with partial pivoting and its solve. Our solver has its own LU
+/// (`src/solver/lu.rs`, crate-private), so nalgebra's stands in for the price of one.
+fn write_costs(path: &Path, scenes: &[&str]) -> Result {
+    let mut text = format!("{COSTS_HEADER}\n");
+    for scene in scenes {
+        let problem = problem::problem(scene)?;
+        let s = &problem.scene;
+        let model = BeamBody::new(s.params).map_err(|err| err.to_string())?;
+        let t = 5.0;
+        let piece = s.law.piece_from(t);
+        let (rhs, lu, solve) = match s.formulation {
+            Formulation::Reduced | Formulation::Linear => {
+                let sys = TwoDofSystem {
+                    model: &model,
+                    phi: piece,
+                    linear: s.formulation == Formulation::Linear,
+                };
+                costs(&sys, t, SVector::<f64, 4>::new(0.01, 0.004, 0.05, 0.02))
+            }
+            Formulation::Dae | Formulation::DaeStabilized => {
+                let sys = DaeSystem {
+                    model: &model,
+                    phi: piece,
+                    stabilized: s.formulation == Formulation::DaeStabilized,
+                };
+                let y = SVector::<f64, 6>::from([0.01, 0.004, 0.0, 0.05, 0.02, 0.0]);
+                costs(&sys, t, sys.consistent(&y))
+            }
+        };
+        writeln!(text, "{scene},{rhs:.2},{lu:.2},{solve:.2}").expect("String");
+        eprintln!("  costs {}: rhs {rhs:.1} ns, LU {lu:.1} ns, solve {solve:.1} ns", problem.name);
+    }
+    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+}
+
+/// (rhs, LU, solve) in ns.
+fn costs<const N: usize>(sys: &impl OdeSystem<N>, t: f64, y: SVector<f64, N>) -> (f64, f64, f64)
+where
+    nalgebra::Const<N>: nalgebra::DimMin<nalgebra::Const<N>, Output = nalgebra::Const<N>>,
+{
+    let rhs = median_ns(|| {
+        black_box(sys.rhs(black_box(t), black_box(&y)));
+    });
+    let f0 = sys.rhs(t, &y);
+    let mut jac = SMatrix::<f64, N, N>::zeros();
+    for j in 0..N {
+        let mut yj = y;
+        let inc = 1e-8 * y[j].abs().max(1e-3);
+        yj[j] += inc;
+        jac.set_column(j, &((sys.rhs(t, &yj) - f0) / inc));
+    }
+    let newton = SMatrix::<f64, N, N>::identity() - jac * 1e-3;
+    let lu = median_ns(|| {
+        black_box(black_box(newton).lu());
+    });
+    let factors = newton.lu();
+    let b = f0;
+    let solve = median_ns(|| {
+        black_box(factors.solve(black_box(&b)));
+    });
+    (rhs, lu, solve)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_decades_read_back_exactly() {
+        let texts: Vec<String> = (0..15).map(half_decade).collect();
+        assert_eq!(texts[0], "1e-3");
+        assert_eq!(texts[2], "1e-4");
+        assert_eq!(texts[14], "1e-10");
+        for (k, text) in texts.iter().enumerate() {
+            let x: f64 = text.parse().unwrap();
+            let want = 10f64.powf(-3.0 - k as f64 / 2.0);
+            assert!((x / want - 1.0).abs() < 1e-15, "{text}");
+        }
+    }
+
+    #[test]
+    fn case_lists_round_trip_through_the_csv() {
+        let dir = std::env::temp_dir().join(format!("bench-cases-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        for mode in [Mode::Full, Mode::Quick] {
+            let list = cases(mode);
+            let path = dir.join("cases.csv");
+            write_cases(&path, &list).unwrap();
+            assert_eq!(read_cases(&path).unwrap(), list);
+        }
+        fs::remove_dir_all(&dir).unwrap();
+        let quick = cases(Mode::Quick);
+        assert_eq!(quick.iter().filter(|c| c.solver == "bdf").count(), 12);
+        assert_eq!(quick.iter().filter(|c| c.solver == "fmu").count(), 2);
+        let full = cases(Mode::Full);
+        assert_eq!(full.iter().filter(|c| c.solver == "bdf").count(), 60);
+        assert_eq!(full.iter().filter(|c| c.solver == "scipy-radau").count(), 36);
+        assert!(!quick.iter().any(|c| c.is_scipy() && c.scene == "stiff"));
+    }
+
+    #[test]
+    fn shuffle_is_a_permutation_that_depends_on_the_seed() {
+        let mut a: Vec<u32> = (0..50).collect();
+        let mut b = a.clone();
+        shuffle(&mut a, 1);
+        shuffle(&mut b, 2);
+        assert_ne!(a, b);
+        a.sort_unstable();
+        assert_eq!(a, (0..50).collect::<Vec<_>>());
+    }
+}

@@ -1,0 +1,68 @@
+//! Our integrator: `bdf` (adaptive, the scene's solver options with the case's rtol) and
+//! `bdf-fixed` (the paper's constant-step mode), both through [`beam_body::sim::simulate`],
+//! the driver of the CLI: it lands on the law's breakpoint t_rot and restarts there.
+
+use beam_body::sim::{Run, Scene};
+use beam_body::solver::{FixedStep, Stats};
+
+use super::problem::{Counters, Outcome, Problem};
+
+/// The order of `bdf-fixed`. The paper (Russkikh & Shklyarchuk 2020, §4) says only "BDF in
+/// PTC MathCad 15.0 with a constant step Δτ = 1e-5"; it names no order. We use BDF2, the
+/// highest A-stable BDF and the default of the scene key `fixed_order`, as the project's
+/// fixed-step test does (tests/model.rs).
+pub const FIXED_ORDER: usize = 2;
+
+/// The tolerance of the Newton corrector in `bdf-fixed` (the only use of rtol in that
+/// mode): tight, so that the error is the method's truncation error, not the corrector's.
+/// With steps of 1e-3 s and less the predictor is already close, so it costs few extra
+/// iterations.
+pub const FIXED_NEWTON_RTOL: f64 = 1e-10;
+
+/// Our adaptive BDF at `rtol`, atol = 1e-3·rtol (the default rule).
+pub fn bdf(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
+    let mut scene = problem.scene.clone();
+    scene.solver.rtol = rtol;
+    scene.solver.atol = None;
+    scene.solver.fixed_step = None;
+    solve(problem, &scene)
+}
+
+/// Our BDF of order [`FIXED_ORDER`] with the constant step `h` [s].
+pub fn bdf_fixed(problem: &Problem, h: f64) -> Result<Outcome, String> {
+    let mut scene = problem.scene.clone();
+    scene.solver.rtol = FIXED_NEWTON_RTOL;
+    scene.solver.atol = None;
+    scene.solver.fixed_step = Some(FixedStep { h, order: FIXED_ORDER });
+    solve(problem, &scene)
+}
+
+/// The run on the problem's grid: our driver (`Run`, as the CLI and the FMU use it), states
+/// from its dense output. Like the other solvers, it records the states only; the CLI's
+/// `simulate` would also compute accelerations, reactions and energy at every grid point.
+fn solve(problem: &Problem, scene: &Scene) -> Result<Outcome, String> {
+    let model = scene.validate().map_err(|err| err.to_string())?;
+    let law = scene.law;
+    let start = law.piece_from(0.0);
+    let mut run = Run::new(model, scene.formulation, &scene.solver, 0.0, scene.initial, start)
+        .map_err(|err| err.to_string())?;
+    let mut states = Vec::with_capacity(problem.grid.len());
+    let mut y = [0.0; 6];
+    for &t in &problem.grid {
+        run.advance_law(&law, t, scene.t_end).map_err(|err| err.to_string())?;
+        let n = run.state_at(t, &mut y).map_err(|err| err.to_string())?;
+        states.push(y[..n].to_vec());
+    }
+    Ok(Outcome { states, counters: counters(&run.stats()) })
+}
+
+fn counters(stats: &Stats) -> Counters {
+    Counters {
+        steps: Some(stats.steps),
+        rejected: Some(stats.rejected()),
+        rhs_evals: Some(stats.total_rhs_evals()),
+        jac_evals: Some(stats.jac_evals),
+        lu_factorizations: Some(stats.lu_factorizations),
+        newton_iters: Some(stats.newton_iters),
+    }
+}

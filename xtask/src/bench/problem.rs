@@ -1,0 +1,135 @@
+//! The benchmark's problems: a scene (parameters, law, formulation, end time), its output
+//! grid, and what a solver returns on it (the file formats are described in [`super`]).
+
+use std::fs;
+
+use beam_body::model::Formulation;
+use beam_body::sim::Scene;
+
+use crate::project_root;
+
+/// The output step of every solver: t_k = k·0.01 s, the last point exactly t_end.
+pub const DT_GRID: f64 = 0.01;
+
+/// The benchmark's scenes: (name, scene file in `scenes/`, formulation).
+pub const SCENES: [(&str, &str, Formulation); 4] = [
+    ("paper", "paper.toml", Formulation::Reduced),
+    ("paper-dae", "paper.toml", Formulation::Dae),
+    ("paper-dae-stabilized", "paper.toml", Formulation::DaeStabilized),
+    ("stiff", "stiff.toml", Formulation::Reduced),
+];
+
+/// One benchmark problem.
+pub struct Problem {
+    /// The scene's name (a key of [`SCENES`]).
+    pub name: String,
+    /// Parameters, law, formulation, t_end, solver defaults. `dt_out` is [`DT_GRID`].
+    pub scene: Scene,
+    /// The output times: k·0.01 s, k = 0 … round(t_end/0.01), the last exactly t_end.
+    pub grid: Vec<f64>,
+}
+
+/// A solver's work counters; `None` where the solver does not report one.
+#[derive(Default, Clone, Copy)]
+pub struct Counters {
+    pub steps: Option<u64>,
+    pub rejected: Option<u64>,
+    /// All f-evaluations, those for finite-difference Jacobians included.
+    pub rhs_evals: Option<u64>,
+    pub jac_evals: Option<u64>,
+    pub lu_factorizations: Option<u64>,
+    pub newton_iters: Option<u64>,
+}
+
+/// What one solve produced.
+pub struct Outcome {
+    /// One row per grid time, the states in [`state_names`] order.
+    pub states: Vec<Vec<f64>>,
+    pub counters: Counters,
+}
+
+/// The problem of a scene of [`SCENES`], read from its scene file.
+pub fn problem(scene_name: &str) -> Result<Problem, String> {
+    let (_, file, formulation) =
+        SCENES.iter().find(|(name, _, _)| *name == scene_name).ok_or_else(|| {
+            let names: Vec<&str> = SCENES.iter().map(|s| s.0).collect();
+            format!("unknown scene `{scene_name}`: must be one of {}", names.join(", "))
+        })?;
+    let path = project_root().join("scenes").join(file);
+    let text = fs::read_to_string(&path)
+        .map_err(|err| format!("cannot read {}: {err}", path.display()))?;
+    let mut scene = Scene::default();
+    for (line, key, value) in scene_entries(&text)? {
+        scene.set(&key, &value).map_err(|err| format!("{}:{line}: {err}", path.display()))?;
+    }
+    scene.formulation = *formulation;
+    scene.dt_out = DT_GRID;
+    let n = (scene.t_end / DT_GRID).round() as usize;
+    if ((n as f64) * DT_GRID - scene.t_end).abs() > 1e-9 * scene.t_end {
+        return Err(format!(
+            "{}: t_end = {} is not a multiple of the grid step {DT_GRID} s",
+            path.display(),
+            scene.t_end
+        ));
+    }
+    let grid = (0..=n).map(|k| if k == n { scene.t_end } else { k as f64 * DT_GRID }).collect();
+    scene.validate().map_err(|err| format!("{}: {err}", path.display()))?;
+    Ok(Problem { name: scene_name.to_string(), scene, grid })
+}
+
+/// The recorded states of a formulation, in column order (SI units).
+pub fn state_names(f: Formulation) -> &'static [&'static str] {
+    if f.is_dae() {
+        &["v1", "theta1", "u2", "dv1", "dtheta1", "du2"]
+    } else {
+        &["v1", "theta1", "dv1", "dtheta1"]
+    }
+}
+
+/// The `key = value` lines of a flat TOML scene file (numbers, booleans, "strings", `#`
+/// comments), as the CLI reads them (`src/bin/beam-body.rs`). Returns (line, key, value).
+fn scene_entries(text: &str) -> Result<Vec<(usize, String, String)>, String> {
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let n = i + 1;
+        let line = match raw.find('#') {
+            Some(pos) if !raw[..pos].contains('"') => &raw[..pos],
+            _ => raw,
+        }
+        .trim();
+        if line.is_empty() {
+            continue;
+        }
+        if line.starts_with('[') {
+            return Err(format!("line {n}: tables are not used: a scene is flat `key = value`"));
+        }
+        let (key, value) = line
+            .split_once('=')
+            .ok_or_else(|| format!("line {n}: expected `key = value`, got `{line}`"))?;
+        let value = value.trim();
+        let value = match value.strip_prefix('"') {
+            Some(rest) => {
+                rest.strip_suffix('"').ok_or_else(|| format!("line {n}: unterminated string"))?
+            }
+            None => value,
+        };
+        out.push((n, key.trim().to_string(), value.to_string()));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_grid_has_1021_points_ending_at_t_end() {
+        let p = problem("paper").unwrap();
+        assert_eq!(p.grid.len(), 1021);
+        assert_eq!(p.grid[0], 0.0);
+        assert_eq!(*p.grid.last().unwrap(), 10.2);
+        assert_eq!(p.scene.formulation, Formulation::Reduced);
+        assert_eq!(state_names(Formulation::Dae).len(), 6);
+        assert!(problem("nope").is_err());
+    }
+}
