@@ -248,6 +248,41 @@ impl Scene {
     }
 }
 
+/// The `key = value` lines of a flat TOML scene file: numbers, booleans and "strings",
+/// `#` comments, as (line number, key, value). Tables and arrays are not part of the scene
+/// format. Parsing only: the caller reads the file and applies the entries ([`Scene::set`]).
+pub fn scene_entries(text: &str) -> Result<Vec<(usize, String, String)>, String> {
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let n = i + 1;
+        let line = match raw.find('#') {
+            Some(pos) if !raw[..pos].contains('"') => &raw[..pos],
+            _ => raw,
+        }
+        .trim();
+        if line.is_empty() {
+            continue;
+        }
+        if line.starts_with('[') {
+            return Err(format!(
+                "line {n}: tables are not used: a scene is flat `key = value` lines"
+            ));
+        }
+        let (key, val) = line
+            .split_once('=')
+            .ok_or_else(|| format!("line {n}: expected `key = value`, got `{line}`"))?;
+        let val = val.trim();
+        let val = match val.strip_prefix('"') {
+            Some(rest) => {
+                rest.strip_suffix('"').ok_or_else(|| format!("line {n}: unterminated string"))?
+            }
+            None => val,
+        };
+        out.push((n, key.trim().to_string(), val.to_string()));
+    }
+    Ok(out)
+}
+
 /// Why a run failed.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SimError {

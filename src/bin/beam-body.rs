@@ -8,7 +8,7 @@
 //! ```
 
 use beam_body::model::{BeamBody, Formulation, Outputs, Phi};
-use beam_body::sim::{simulate, Scene};
+use beam_body::sim::{scene_entries, simulate, Scene};
 use nalgebra::{Vector2, Vector3};
 use std::f64::consts::PI;
 use std::io::{self, BufRead, BufWriter, Write};
@@ -119,40 +119,6 @@ fn parse(args: &[String], allow_output: bool) -> Result<Cli, Usage> {
         scene.set(k, v).map_err(Usage)?;
     }
     Ok(Cli { scene, output, scene_file })
-}
-
-/// The `key = value` lines of a flat TOML scene file: numbers, booleans and "strings",
-/// `#` comments. Tables and arrays are not part of the scene format.
-fn scene_entries(text: &str) -> Result<Vec<(usize, String, String)>, String> {
-    let mut out = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let n = i + 1;
-        let line = match raw.find('#') {
-            Some(pos) if !raw[..pos].contains('"') => &raw[..pos],
-            _ => raw,
-        }
-        .trim();
-        if line.is_empty() {
-            continue;
-        }
-        if line.starts_with('[') {
-            return Err(format!(
-                "line {n}: tables are not used: a scene is flat `key = value` lines"
-            ));
-        }
-        let (key, val) = line
-            .split_once('=')
-            .ok_or_else(|| format!("line {n}: expected `key = value`, got `{line}`"))?;
-        let val = val.trim();
-        let val = match val.strip_prefix('"') {
-            Some(rest) => {
-                rest.strip_suffix('"').ok_or_else(|| format!("line {n}: unterminated string"))?
-            }
-            None => val,
-        };
-        out.push((n, key.trim().to_string(), val.to_string()));
-    }
-    Ok(out)
 }
 
 fn cmd_simulate(args: &[String]) -> Result<(), Usage> {

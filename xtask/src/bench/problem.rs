@@ -4,7 +4,7 @@
 use std::fs;
 
 use beam_body::model::Formulation;
-use beam_body::sim::Scene;
+use beam_body::sim::{scene_entries, Scene};
 
 use crate::project_root;
 
@@ -84,38 +84,6 @@ pub fn state_names(f: Formulation) -> &'static [&'static str] {
     } else {
         &["v1", "theta1", "dv1", "dtheta1"]
     }
-}
-
-/// The `key = value` lines of a flat TOML scene file (numbers, booleans, "strings", `#`
-/// comments), as the CLI reads them (`src/bin/beam-body.rs`). Returns (line, key, value).
-fn scene_entries(text: &str) -> Result<Vec<(usize, String, String)>, String> {
-    let mut out = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let n = i + 1;
-        let line = match raw.find('#') {
-            Some(pos) if !raw[..pos].contains('"') => &raw[..pos],
-            _ => raw,
-        }
-        .trim();
-        if line.is_empty() {
-            continue;
-        }
-        if line.starts_with('[') {
-            return Err(format!("line {n}: tables are not used: a scene is flat `key = value`"));
-        }
-        let (key, value) = line
-            .split_once('=')
-            .ok_or_else(|| format!("line {n}: expected `key = value`, got `{line}`"))?;
-        let value = value.trim();
-        let value = match value.strip_prefix('"') {
-            Some(rest) => {
-                rest.strip_suffix('"').ok_or_else(|| format!("line {n}: unterminated string"))?
-            }
-            None => value,
-        };
-        out.push((n, key.trim().to_string(), value.to_string()));
-    }
-    Ok(out)
 }
 
 #[cfg(test)]
