@@ -43,7 +43,8 @@ Commands:
   bench [--quick]
           The work-precision benchmark (error against run time, target/bench/):
           - set up target/venv with xtask/python/requirements-bench.txt, package the
-            FMU, install SUNDIALS' runtime libraries with apt-get when missing (root);
+            FMU, build CVODE 7.1.1 at -O3 from the sundials-sys crate's C sources
+            (once; Debian's -O0 libsundials through apt-get only if that fails);
           - write the cases (target/bench/cases.csv): solvers bdf, bdf-fixed, cvode,
             diffsol, fmu, scipy-bdf, scipy-radau, scipy-lsoda on the scenes paper,
             paper-dae, paper-dae-stabilized and stiff;
