@@ -7,7 +7,7 @@
 #![forbid(unsafe_code)]
 
 use crate::model::{
-    pq, u1, BeamBody, DaeSystem, Formulation, Outputs, PaperLaw, ParamError, Params, Phi, PhiPiece,
+    BeamBody, DaeSystem, Formulation, Outputs, PaperLaw, ParamError, Params, Phi, PhiPiece,
     TaylorSignal, TwoDofSystem, ValueHistory,
 };
 use crate::solver::{Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
@@ -416,16 +416,9 @@ impl Run {
         piece: PhiPiece,
     ) -> Result<Self, SolverError> {
         let bdf = if formulation.is_dae() {
-            let l = model.params.l;
-            let (p, q) = pq(l, init.v1, init.theta1);
-            let y0 = SVector::<f64, 6>::from([
-                init.v1,
-                init.theta1,
-                u1(l, init.v1, init.theta1),
-                init.dv1,
-                init.dtheta1,
-                -p * init.dv1 - l * q * init.dtheta1,
-            ]);
+            let free =
+                SVector::<f64, 6>::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
+            let y0 = dae(&model, piece, formulation).consistent(&free);
             Integrator::Dae(Bdf::new(options.config(), t0, y0)?)
         } else {
             let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
