@@ -235,6 +235,27 @@ struct Api {
     get_string_status: GetStringStatus,
 }
 
+/// The function `name` (NUL-terminated) of `lib`, copied out of its `Symbol`; `None` after
+/// recording the name (without the NUL) in `missing`. Shared by this host and the
+/// benchmark's CVODE loader.
+///
+/// # Safety
+/// `T` must be the function's true C signature, and `lib` must stay loaded while the pointer
+/// is used.
+pub(crate) unsafe fn symbol<T: Copy>(
+    lib: &Library,
+    name: &'static str,
+    missing: &mut Vec<&'static str>,
+) -> Option<T> {
+    match lib.get::<T>(name.as_bytes()) {
+        Ok(symbol) => Some(*symbol),
+        Err(_) => {
+            missing.push(name.trim_end_matches('\0'));
+            None
+        }
+    }
+}
+
 impl Api {
     /// Resolves every function; the error names all that are missing.
     fn resolve(lib: &Library, path: &Path) -> Result<Api> {
@@ -244,13 +265,7 @@ impl Api {
         // `Symbol`, and `Fmu2` keeps `lib` loaded for as long as it holds the pointers.
         macro_rules! sym {
             ($name:literal) => {
-                match unsafe { lib.get(concat!($name, "\0").as_bytes()) } {
-                    Ok(symbol) => Some(*symbol),
-                    Err(_) => {
-                        missing.push($name);
-                        None
-                    }
-                }
+                unsafe { symbol(lib, concat!($name, "\0"), &mut missing) }
             };
         }
         let api = (|| {

@@ -211,13 +211,7 @@ impl Api {
         // and `Api` keeps `lib` loaded for as long as it holds them.
         macro_rules! sym {
             ($name:literal) => {
-                match unsafe { lib.get(concat!($name, "\0").as_bytes()) } {
-                    Ok(symbol) => Some(*symbol),
-                    Err(_) => {
-                        missing.push($name);
-                        None
-                    }
-                }
+                unsafe { crate::host::symbol(&lib, concat!($name, "\0"), &mut missing) }
             };
         }
         let api = (|| {
