@@ -12,9 +12,10 @@
 //! has h·|λ| inside the unstable band of the order used. BDF1 and BDF2 are A-stable and are
 //! never capped.
 
+use super::eigen::eigenvalues;
 use super::error::SolverError;
 use super::snapshot::{require, visit_usize, StateVisitor};
-use nalgebra::{DMatrix, SMatrix};
+use nalgebra::SMatrix;
 
 /// The angle α (degrees) of A(α)-stability of BDF_q, index q (Hairer & Wanner II, table V.2.1).
 /// Modes within α of the negative real axis are stable at any step.
@@ -48,53 +49,55 @@ struct Mode {
 }
 
 /// The oscillatory modes of the last Jacobian.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct StabilityGuard {
     modes: [Mode; MAX_MODES],
     count: usize,
+    /// Derived from the modes, not state: index q holds the smallest |h| at which some mode
+    /// enters the unstable band of BDF_q (∞ if none can). Below it order q needs no check,
+    /// which is every step of a run whose modes are resolved.
+    unsafe_from: [f64; 6],
+}
+
+impl Default for StabilityGuard {
+    fn default() -> Self {
+        Self { modes: [Mode::default(); MAX_MODES], count: 0, unsafe_from: [f64::INFINITY; 6] }
+    }
 }
 
 impl StabilityGuard {
     /// Stores the oscillatory modes of `jac`. Called at Jacobian evaluations only (not every
-    /// step); this is the one place the integrator allocates, for nalgebra's Schur form.
+    /// step). If the eigenvalue iteration fails, no mode is stored and the guard allows any
+    /// order, as it does without a Jacobian.
     pub(crate) fn update<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
         self.count = 0;
-        if !jac.iter().all(|x| x.is_finite()) {
+        let Some(eigenvalues) = eigenvalues(jac) else {
+            self.derive_bounds();
             return;
-        }
-        let (eps, iters) = (1e-14, 200 * N.max(1));
-        // The model's sizes, 4 and 6, get nalgebra's fixed-size Schur form (stack only, about
-        // 3× faster than the dynamic one); a generic N cannot name its typenum bounds.
-        let eigenvalues: Vec<nalgebra::Complex<f64>> = match N {
-            4 => nalgebra::Schur::try_new(
-                SMatrix::<f64, 4, 4>::from_column_slice(jac.as_slice()),
-                eps,
-                iters,
-            )
-            .map(|s| s.complex_eigenvalues().iter().copied().collect()),
-            6 => nalgebra::Schur::try_new(
-                SMatrix::<f64, 6, 6>::from_column_slice(jac.as_slice()),
-                eps,
-                iters,
-            )
-            .map(|s| s.complex_eigenvalues().iter().copied().collect()),
-            _ => nalgebra::Schur::try_new(
-                DMatrix::from_column_slice(N, N, jac.as_slice()),
-                eps,
-                iters,
-            )
-            .map(|s| s.complex_eigenvalues().iter().copied().collect()),
-        }
-        .unwrap_or_default();
-        for ev in eigenvalues.iter() {
-            if ev.im <= 0.0 || self.count == MAX_MODES {
+        };
+        for &(re, im) in eigenvalues.iter() {
+            if im <= 0.0 || self.count == MAX_MODES {
                 continue;
             }
-            let angle_deg = ev.im.atan2(-ev.re).to_degrees();
+            let angle_deg = im.atan2(-re).to_degrees();
             if angle_deg <= MAX_ANGLE_DEG {
-                self.modes[self.count] = Mode { modulus: ev.norm(), angle_deg };
+                self.modes[self.count] = Mode { modulus: re.hypot(im), angle_deg };
                 self.count += 1;
             }
+        }
+        self.derive_bounds();
+    }
+
+    fn derive_bounds(&mut self) {
+        for (q, bound) in self.unsafe_from.iter_mut().enumerate() {
+            *bound = match unstable_band(q) {
+                Some((lo, _)) => self.modes[..self.count.min(MAX_MODES)]
+                    .iter()
+                    .filter(|m| m.angle_deg > A_STABILITY_ANGLE_DEG[q])
+                    .map(|m| lo / m.modulus)
+                    .fold(f64::INFINITY, f64::min),
+                None => f64::INFINITY,
+            };
         }
     }
 
@@ -105,6 +108,7 @@ impl StabilityGuard {
             v.real("guard.angle", &mut m.angle_deg);
         }
         visit_usize(v, "guard.count", &mut self.count);
+        self.derive_bounds();
     }
 
     /// What [`update`](Self::update) stores: finite moduli ≥ 0, angles in
@@ -121,13 +125,14 @@ impl StabilityGuard {
     /// Forgets the stored modes (the guard then allows any order).
     pub(crate) fn clear(&mut self) {
         self.count = 0;
+        self.derive_bounds();
     }
 
     /// The highest order ≤ `q` at which step `h` keeps every stored mode outside the
     /// unstable band.
     pub(crate) fn max_safe_order(&self, q: usize, h: f64) -> usize {
         let mut k = q;
-        while k >= 3 && !self.safe(k, h) {
+        while k >= 3 && h.abs() >= self.unsafe_from[k] && !self.safe(k, h) {
             k -= 1;
         }
         k

@@ -7,6 +7,7 @@
 mod bdf;
 mod coeffs;
 mod config;
+mod eigen;
 mod error;
 mod guard;
 mod lu;
