@@ -4,10 +4,9 @@
 //! Step and order selection, Newton convergence and Jacobian/LU reuse follow the CVODE
 //! description (Hindmarsh et al., "SUNDIALS", ACM TOMS 31 (2005), §2.1, and the SUNDIALS
 //! CVODE user guide, "Mathematical considerations"); every constant below names its source.
-//! All data live on the stack: a step allocates nothing (the one exception, the stability
-//! guard's eigenvalues, runs only when J is re-evaluated).
+//! All data live on the stack: a step allocates nothing.
 
-use super::coeffs::{bdf_coeffs, lower_order, raise_order, StepCoeffs, NCOL, QMAX};
+use super::coeffs::{lower_order, raise_order, StepCoeffs, NCOL, QMAX};
 use super::config::BdfConfig;
 use super::error::SolverError;
 use super::guard::StabilityGuard;
@@ -70,7 +69,46 @@ const LANDING_STRETCH: f64 = 1e-6;
 /// a method whose error scales as h^`exponent`) to 1/`bias` of the tolerance:
 /// η = 1/((bias·err)^(1/exponent) + ADDON) (CVODE cvChooseEta and cvHandleNFlag).
 fn step_ratio(bias: f64, err: f64, exponent: usize) -> f64 {
-    1.0 / ((bias * err).powf(1.0 / exponent as f64) + ADDON)
+    1.0 / (root(bias * err, exponent) + ADDON)
+}
+
+/// x^(1/k), by square roots where they serve (k = 1, 2, 4): a fraction of the cost of
+/// `powf`, which the order selection calls two or three times every other step. (Rust's
+/// `cbrt` is correctly rounded and no cheaper than `powf`.)
+fn root(x: f64, k: usize) -> f64 {
+    match k {
+        1 => x,
+        2 => x.sqrt(),
+        4 => x.sqrt().sqrt(),
+        _ => x.powf(1.0 / k as f64),
+    }
+}
+
+/// The prediction z ← P·z by the Pascal triangle (CVODE cvPredict), or with `UNDO` its
+/// inverse (cvRestore), for order q. The order is made a constant so the loops unroll:
+/// this runs at every step attempt.
+fn pascal<const N: usize, const UNDO: bool>(zn: &mut [SVector<f64, N>; NCOL], q: usize) {
+    fn unrolled<const N: usize, const Q: usize, const UNDO: bool>(
+        zn: &mut [SVector<f64, N>; NCOL],
+    ) {
+        for k in 1..=Q {
+            for j in (k..=Q).rev() {
+                let z = zn[j];
+                if UNDO {
+                    zn[j - 1] -= z;
+                } else {
+                    zn[j - 1] += z;
+                }
+            }
+        }
+    }
+    match q {
+        1 => unrolled::<N, 1, UNDO>(zn),
+        2 => unrolled::<N, 2, UNDO>(zn),
+        3 => unrolled::<N, 3, UNDO>(zn),
+        4 => unrolled::<N, 4, UNDO>(zn),
+        _ => unrolled::<N, QMAX, UNDO>(zn),
+    }
 }
 
 /// What one call of [`Bdf::step`] achieved.
@@ -676,23 +714,13 @@ impl<const N: usize> Bdf<N> {
             Some(tstop) => tstop,
             None => self.t + self.h,
         };
-        for k in 1..=self.q {
-            for j in (k..=self.q).rev() {
-                let add = self.zn[j];
-                self.zn[j - 1] += add;
-            }
-        }
+        pascal::<N, false>(&mut self.zn, self.q);
     }
 
     /// Undoes [`predict`](Self::predict) after a rejected step.
     fn restore(&mut self, t_prior: f64) {
         self.t = t_prior;
-        for k in 1..=self.q {
-            for j in (k..=self.q).rev() {
-                let sub = self.zn[j];
-                self.zn[j - 1] -= sub;
-            }
-        }
+        pascal::<N, true>(&mut self.zn, self.q);
     }
 
     /// Multiplies the step by `eta`: z_j ← η^j z_j.
@@ -713,7 +741,7 @@ impl<const N: usize> Bdf<N> {
     }
 
     fn set_coeffs(&mut self) {
-        self.coeffs = bdf_coeffs(&self.coeffs, self.q, self.h, &self.tau, self.qwait == 1);
+        self.coeffs.update(self.q, self.h, &self.tau, self.qwait == 1);
         self.gamma = self.h / self.coeffs.l[1];
     }
 
@@ -865,9 +893,8 @@ impl<const N: usize> Bdf<N> {
             self.tau[2] = self.tau[1];
         }
         self.tau[1] = self.h;
-        for j in 0..=self.q {
-            let add = self.acor * self.coeffs.l[j];
-            self.zn[j] += add;
+        for (z, l) in self.zn.iter_mut().zip(&self.coeffs.l).take(self.q + 1) {
+            *z += self.acor * *l;
         }
         self.qwait = self.qwait.saturating_sub(1);
         let qmax = self.max_order();
@@ -899,33 +926,37 @@ impl<const N: usize> Bdf<N> {
                 let grows = BIAS_SAME * dsm <= (1.0 / ETA_THRESHOLD - ADDON).powi(q as i32 + 1);
                 eta = if grows { step_ratio(BIAS_SAME, dsm, q + 1) } else { 1.0 };
             } else {
-                let eta_same = step_ratio(BIAS_SAME, dsm, q + 1);
+                // The candidates compared by log((bias·err)^(1/k)), the smallest giving the
+                // largest η: three logarithms and at most one exp cost less than three powf.
+                let log_root = |bias: f64, err: f64, k: usize| (bias * err).ln() / k as f64;
+                let log_same = log_root(BIAS_SAME, dsm, q + 1);
                 self.qwait = 2;
-                let eta_down = if q > 1 {
+                let log_down = if q > 1 {
                     let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
-                    step_ratio(BIAS_DOWN, ddn, q)
+                    log_root(BIAS_DOWN, ddn, q)
                 } else {
-                    0.0
+                    f64::INFINITY
                 };
                 let qmax = self.cfg.max_order;
-                let eta_up = if q != qmax && self.saved_tq5 != 0.0 {
+                let log_up = if q != qmax && self.saved_tq5 != 0.0 {
                     let ratio = (self.coeffs.tq[5] / self.saved_tq5)
                         * (self.h / self.tau[2]).powi(q as i32 + 1);
                     let diff = self.acor - self.zn[qmax] * ratio;
                     let dup = self.wrms(&diff) * self.coeffs.tq[3];
-                    step_ratio(BIAS_UP, dup, q + 2)
+                    log_root(BIAS_UP, dup, q + 2)
                 } else {
-                    0.0
+                    f64::INFINITY
                 };
-                eta = eta_same;
-                if eta_down > eta && eta_down >= eta_up {
-                    eta = eta_down;
+                let mut best = log_same;
+                if log_down < best && log_down <= log_up {
+                    best = log_down;
                     q_next = q - 1;
-                } else if eta_up > eta {
-                    eta = eta_up;
+                } else if log_up < best {
+                    best = log_up;
                     q_next = q + 1;
                     self.zn[qmax] = self.acor;
                 }
+                eta = 1.0 / (best.exp() + ADDON);
             }
             if eta < ETA_THRESHOLD {
                 eta = 1.0;
@@ -1020,6 +1051,17 @@ mod tests {
         fn jacobian(&self, _t: f64, _y: &Vector2<f64>) -> Option<Matrix2<f64>> {
             Some(Matrix2::new(0.0, 1.0, -self.0 * self.0, 0.0))
         }
+    }
+
+    #[test]
+    fn root_agrees_with_powf() {
+        for k in 1..=7 {
+            for x in [1e-300, 1e-12, 0.3, 1.0, 2.5, 7e5, 1e300] {
+                let (a, b) = (root(x, k), x.powf(1.0 / k as f64));
+                assert!((a - b).abs() <= 4.0 * f64::EPSILON * b, "k={k} x={x}: {a} vs {b}");
+            }
+        }
+        assert_eq!(root(0.0, 3), 0.0);
     }
 
     #[test]

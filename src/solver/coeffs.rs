@@ -81,6 +81,10 @@ impl StepCoeffs {
     }
 }
 
+/// The harmonic numbers H_q = Σ_{j=1}^{q} 1/j, q = 0..=QMAX (−α0 of BDF_q).
+const HARMONIC: [f64; NCOL] =
+    [0.0, 1.0, 1.5, 1.5 + 1.0 / 3.0, 1.5 + 1.0 / 3.0 + 0.25, 1.5 + 1.0 / 3.0 + 0.25 + 0.2];
+
 /// The ratios ξ_1..=ξ_{q+1} of the new step (index 0 unused).
 fn xi_ratios(q: usize, h: f64, tau: &[f64; NCOL + 1]) -> [f64; NCOL + 1] {
     let mut xi = [0.0; NCOL + 1];
@@ -103,6 +107,7 @@ fn same(a: &StepCoeffs, b: &StepCoeffs) -> bool {
 /// they were computed for the same order, ratios ξ and `order_change`, else new ones.
 ///
 /// `order_change` asks for tq[1] and tq[3], which need one more past step.
+#[cfg(test)]
 pub(crate) fn bdf_coeffs(
     prev: &StepCoeffs,
     q: usize,
@@ -110,33 +115,50 @@ pub(crate) fn bdf_coeffs(
     tau: &[f64; NCOL + 1],
     order_change: bool,
 ) -> StepCoeffs {
-    debug_assert!((1..=QMAX).contains(&q));
-    let xi = xi_ratios(q, h, tau);
-    // Coefficients computed with tq[1] and tq[3] serve a step that does not need them: the
-    // order change is considered every other step, so this keeps the cache warm.
-    if prev.key_q == q && prev.key_xi == xi && (prev.key_order_change || !order_change) {
-        return *prev;
+    let mut c = *prev;
+    c.update(q, h, tau, order_change);
+    c
+}
+
+impl StepCoeffs {
+    /// Makes these the coefficients of the order-q step of size h after the steps `tau`,
+    /// keeping them when they were computed for the same order, ratios ξ and `order_change`
+    /// (in place: this runs at every step attempt).
+    ///
+    /// `order_change` asks for tq[1] and tq[3], which need one more past step.
+    pub(crate) fn update(&mut self, q: usize, h: f64, tau: &[f64; NCOL + 1], order_change: bool) {
+        debug_assert!((1..=QMAX).contains(&q));
+        let xi = xi_ratios(q, h, tau);
+        // Coefficients computed with tq[1] and tq[3] serve a step that does not need them:
+        // the order change is considered every other step, so this keeps the cache warm.
+        if self.key_q == q && self.key_xi == xi && (self.key_order_change || !order_change) {
+            return;
+        }
+        *self = coeffs_from_xi(q, &xi, order_change);
     }
-    coeffs_from_xi(q, &xi, order_change)
 }
 
 /// The coefficients for order q and ratios ξ (see [`bdf_coeffs`]).
 fn coeffs_from_xi(q: usize, xi: &[f64; NCOL + 1], order_change: bool) -> StepCoeffs {
     let qf = q as f64;
 
+    let mut inv_xi = [0.0; NCOL + 1];
+    for (inv, x) in inv_xi.iter_mut().zip(xi).take(q + 2).skip(1) {
+        *inv = 1.0 / x;
+    }
     // Λ(x) = Π_{j=1}^{q−1} (1 + x/ξ_j) · (1 + x/ξ*): the l_j are its coefficients.
     let mut l = [0.0; NCOL];
     l[0] = 1.0;
-    for &x in &xi[1..q] {
+    for &inv in &inv_xi[1..q] {
         for i in (1..=q).rev() {
-            l[i] += l[i - 1] / x;
+            l[i] += l[i - 1] * inv;
         }
     }
     // α0 = −Σ 1/j is the leading coefficient of the fixed-leading-coefficient formula;
     // α̂0 = −Σ 1/ξ_j that of the variable-coefficient formula on the same points.
-    let alpha0 = -(1..=q).map(|j| 1.0 / j as f64).sum::<f64>();
-    let sum_inv_xi_head: f64 = xi[1..q].iter().map(|x| 1.0 / x).sum();
-    let alpha0_hat = -sum_inv_xi_head - 1.0 / xi[q];
+    let alpha0 = -HARMONIC[q];
+    let sum_inv_xi_head: f64 = inv_xi[1..q].iter().sum();
+    let alpha0_hat = -sum_inv_xi_head - inv_xi[q];
     // 1/ξ* is chosen so that l_1 = −α0.
     let inv_xi_star = if q == 1 { 1.0 } else { -sum_inv_xi_head - alpha0 };
     for i in (1..=q).rev() {
@@ -147,17 +169,17 @@ fn coeffs_from_xi(q: usize, xi: &[f64; NCOL + 1], order_change: bool) -> StepCoe
     let a1 = 1.0 - alpha0_hat + alpha0;
     let a2 = 1.0 + qf * a1;
     tq[2] = (a1 / (alpha0 * a2)).abs();
-    tq[5] = (a2 * inv_xi_star / (l[q] / xi[q])).abs();
+    tq[5] = (a2 * inv_xi_star / (l[q] * inv_xi[q])).abs();
     if order_change {
         tq[1] = if q > 1 {
             let c = inv_xi_star / l[q];
             let a3 = alpha0 + 1.0 / qf;
-            let a4 = alpha0_hat + 1.0 / xi[q];
+            let a4 = alpha0_hat + inv_xi[q];
             (c * (1.0 - a4 + a3) / a3).abs()
         } else {
             1.0
         };
-        let inv_xi_next = 1.0 / xi[q + 1];
+        let inv_xi_next = inv_xi[q + 1];
         let a5 = alpha0 - 1.0 / (qf + 1.0);
         let a6 = alpha0_hat - inv_xi_next;
         let c_next = (1.0 - a6 + a5) / a2;
