@@ -224,7 +224,7 @@ impl BeamBody {
     /// Accelerations (v̈1, ϑ̈1, ü2) of the DAE. NaN if A is singular.
     pub fn dae_accel(&self, phi: &Phi, x: Vector3<f64>, xd: Vector3<f64>) -> Vector3<f64> {
         let (a, b) = self.dae(phi, x, xd);
-        a.lu().solve(&b).unwrap_or(Vector3::repeat(f64::NAN))
+        solve3(a, b).unwrap_or(Vector3::repeat(f64::NAN))
     }
 
     /// The hinge reactions from the body equations (19), given the body's motion: the
@@ -306,10 +306,57 @@ impl BeamBody {
     }
 }
 
+/// x with A x = b by Gaussian elimination with partial pivoting, written out for 3×3 (the
+/// DAE right-hand side solves one per evaluation; nalgebra's generic LU costs several times
+/// as much). `None` if a pivot is zero or not finite.
+fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
+    let mut m = [
+        [a[(0, 0)], a[(0, 1)], a[(0, 2)], b[0]],
+        [a[(1, 0)], a[(1, 1)], a[(1, 2)], b[1]],
+        [a[(2, 0)], a[(2, 1)], a[(2, 2)], b[2]],
+    ];
+    for k in 0..3 {
+        let p = (k..3).fold(k, |p, i| if m[i][k].abs() > m[p][k].abs() { i } else { p });
+        m.swap(k, p);
+        let pivot = m[k][k];
+        if pivot == 0.0 || !pivot.is_finite() {
+            return None;
+        }
+        let row_k = m[k];
+        for row in m.iter_mut().skip(k + 1) {
+            let f = row[k] / pivot;
+            for (v, r) in row.iter_mut().zip(&row_k).skip(k) {
+                *v -= f * r;
+            }
+        }
+    }
+    let x2 = m[2][3] / m[2][2];
+    let x1 = (m[1][3] - m[1][2] * x2) / m[1][1];
+    let x0 = (m[0][3] - m[0][1] * x1 - m[0][2] * x2) / m[0][0];
+    Some(Vector3::new(x0, x1, x2))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::kinematics::u1;
+
+    #[test]
+    fn solve3_matches_nalgebra_lu() {
+        // A saddle-point matrix as the DAE's (zero in the corner, so pivoting is needed),
+        // a scaled one, and a singular one.
+        let saddle = Matrix3::new(2.0, 0.3, 0.7, 0.3, 1.5, -2.5, 0.7, -2.5, 0.0);
+        let scaled = Matrix3::new(1e-8, 1.0, 0.0, 1.0, 1e-8, 3.0, 0.0, 3.0, 1e6);
+        let b = Vector3::new(1.0, -2.0, 0.5);
+        for a in [saddle, scaled, Matrix3::new(0.0, 1.0, 2.0, 1.0, 0.0, 0.0, 2.0, 0.0, 1.0)] {
+            let (ours, lu) = (solve3(a, b).unwrap(), a.lu().solve(&b).unwrap());
+            assert!((ours - lu).norm() <= 1e-13 * lu.norm(), "{ours} vs {lu}");
+            assert!((a * ours - b).norm() <= 1e-12 * b.norm());
+        }
+        let singular = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 1.0, 1.0);
+        assert!(solve3(singular, b).is_none());
+        assert!(solve3(Matrix3::repeat(f64::NAN), b).is_none());
+    }
 
     fn model() -> BeamBody {
         BeamBody::new(Params::default()).unwrap()
