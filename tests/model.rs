@@ -168,3 +168,49 @@ fn every_formulation_runs_and_reports_finite_values() {
         assert!(stats.steps > 100, "{form}");
     }
 }
+
+/// Reversed gravity above the buckling load: the straight beam is unstable and the
+/// deflection grows without bound in the model. The run must stop at a finite time with a
+/// message naming the variable and its allowed range, not run on to garbage or NaN; below
+/// the load the same start oscillates and stays small.
+#[test]
+fn divergence_above_buckling_stops_with_a_clear_message() {
+    let g_cr = {
+        // Where the lowest squared frequency about the straight beam crosses zero.
+        let omega2 = |g: f64| {
+            let s = with(paper(), &[("g", &g.to_string())]);
+            s.validate().unwrap().modes(0.0).omega2[0]
+        };
+        let (mut lo, mut hi) = (0.0, -1000.0);
+        assert!(omega2(hi) < 0.0);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if omega2(mid) > 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        lo
+    };
+    for formulation in ["reduced", "dae", "dae-stabilized"] {
+        let scene = |ratio: f64| {
+            with(
+                paper(),
+                &[
+                    ("g", &(ratio * g_cr).to_string()),
+                    ("phi_end", "0"),
+                    ("v1_0", "1e-3"),
+                    ("formulation", formulation),
+                ],
+            )
+        };
+        let (rows, _) = run(&scene(0.9));
+        assert!(rows.iter().all(|o| o.v1.abs() < 0.05), "{formulation}: below buckling");
+        let mut last_t = 0.0;
+        let err = simulate(&scene(1.1), |o| last_t = o.t).unwrap_err().to_string();
+        assert!(err.contains("outside the model's range of validity"), "{formulation}: {err}");
+        assert!(err.contains("v1") || err.contains("theta1"), "{err}");
+        assert!(last_t > 0.1 && last_t < 10.2, "{formulation}: stopped after t = {last_t}");
+    }
+}

@@ -6,8 +6,25 @@
 use super::dynamics::{BeamBody, Reactions};
 use super::kinematics::{pq, u1, u1_accel_bias};
 use super::phi::{Phi, PhiPiece};
-use crate::solver::OdeSystem;
+use crate::solver::{OdeSystem, RangeViolation};
 use nalgebra::{SVector, Vector2, Vector3, Vector4, Vector6};
+
+/// The range of validity the integration enforces: beyond it the Ritz model of moderately
+/// large deflections (inextensible beam, axial shortening u1 quadratic in v1 and ϑ1) no
+/// longer describes a beam, and a run that gets there (buckling under a reversed load, a
+/// non-physical jump of φ) stops with [`SolverError::OutOfRange`](crate::solver::SolverError)
+/// instead of reporting numbers. The limits are generous, far beyond "moderately large" (the
+/// paper's scene reaches |v1| = 0.24·l and |ϑ1| = 0.41 rad): they catch divergence, not
+/// loss of accuracy.
+pub fn check_deflection(l: f64, v1: f64, theta1: f64) -> Result<(), RangeViolation> {
+    if v1.is_nan() || v1.abs() > l {
+        return Err(RangeViolation { name: "v1", value: v1, allowed: "|v1| <= l" });
+    }
+    if theta1.is_nan() || theta1.abs() > std::f64::consts::FRAC_PI_2 {
+        return Err(RangeViolation { name: "theta1", value: theta1, allowed: "|theta1| <= pi/2" });
+    }
+    Ok(())
+}
 
 /// Everything reported at one instant (SI units).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,6 +120,10 @@ impl OdeSystem<4> for TwoDofSystem<'_> {
         let acc = self.model.two_dof_accel(self.linear, &self.phi.eval(t), q, qd);
         Vector4::new(qd[0], qd[1], acc[0], acc[1])
     }
+
+    fn check_range(&self, _t: f64, y: &Vector4<f64>) -> Result<(), RangeViolation> {
+        check_deflection(self.model.params.l, y[0], y[1])
+    }
 }
 
 /// Eq. (20)+(21), constraint differentiated twice; `stabilized` projects onto the
@@ -162,5 +183,9 @@ impl OdeSystem<6> for DaeSystem<'_> {
 
     fn project(&self, _t: f64, y: &SVector<f64, 6>) -> Option<SVector<f64, 6>> {
         self.stabilized.then(|| self.consistent(y))
+    }
+
+    fn check_range(&self, _t: f64, y: &Vector6<f64>) -> Result<(), RangeViolation> {
+        check_deflection(self.model.params.l, y[0], y[1])
     }
 }

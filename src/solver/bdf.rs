@@ -16,7 +16,7 @@ use super::snapshot::{
     visit_usize, visit_vector, StateVisitor, MAX_COUNT,
 };
 use super::stats::Stats;
-use super::system::OdeSystem;
+use super::system::{OdeSystem, RangeViolation};
 use nalgebra::{SMatrix, SVector};
 
 // Step-size factors (CVODE, cvode.c): growth cap on the first step and later steps, cap after
@@ -484,11 +484,17 @@ impl<const N: usize> Bdf<N> {
         self.complete_step();
         self.choose_next(dsm);
         self.eta_max = ETA_MAX;
-        if self.landing.take().is_some() {
-            Ok(StepOutcome::ReachedStop)
+        let outcome = if self.landing.take().is_some() {
+            StepOutcome::ReachedStop
         } else {
-            Ok(StepOutcome::Stepped)
+            StepOutcome::Stepped
+        };
+        // The step stands (t and y are its end); the caller learns that the state has left
+        // the system's range and stops.
+        if let Err(RangeViolation { name, value, allowed }) = sys.check_range(self.t, &self.zn[0]) {
+            return Err(SolverError::OutOfRange { t: self.t, name, value, allowed });
         }
+        Ok(outcome)
     }
 
     // ----- state save and restore (FMI) --------------------------------------------------

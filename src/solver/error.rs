@@ -24,6 +24,10 @@ pub enum SolverError {
     OutsideLastStep { t: f64, lo: f64, hi: f64 },
     /// The target time lies behind the solver's time.
     TimeBehind { t: f64, target: f64 },
+    /// The state left the region where the system's equations hold
+    /// ([`OdeSystem::check_range`](super::OdeSystem::check_range)), after the step that
+    /// ended at `t`.
+    OutOfRange { t: f64, name: &'static str, value: f64, allowed: &'static str },
     /// A restored integrator state (see [`Bdf::visit_state`](super::Bdf::visit_state)) has a
     /// field outside the values the integrator can produce: corrupt or foreign data.
     InvalidState { field: &'static str },
@@ -64,6 +68,11 @@ impl fmt::Display for SolverError {
             TimeBehind { t, target } => {
                 write!(f, "target time {target} lies behind the solver time {t}")
             }
+            OutOfRange { t, name, value, allowed } => write!(
+                f,
+                "{name} = {value:.6e} at t = {t} is outside the model's range of validity: \
+                 must be {allowed}"
+            ),
             InvalidState { field } => {
                 write!(f, "invalid integrator state: field `{field}` is out of range")
             }

@@ -21,4 +21,4 @@ pub use error::SolverError;
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
 pub use snapshot::StateVisitor;
 pub use stats::Stats;
-pub use system::OdeSystem;
+pub use system::{OdeSystem, RangeViolation};
