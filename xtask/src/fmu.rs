@@ -336,7 +336,7 @@ fn write_csv(path: &Path, rows: &[[f64; 4]]) -> Result {
         text.push_str(&fields.join(","));
         text.push('\n');
     }
-    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+    crate::write_text(path, &text)
 }
 
 fn print_fmu_run(run: &FmuRun, dir: &Path, csv: &Path) {

@@ -11,6 +11,7 @@ mod host;
 mod model_description;
 mod python;
 mod summary;
+mod sweep;
 mod test;
 mod xml;
 
@@ -93,8 +94,10 @@ fn run(args: &[String]) -> Result {
             no_options(command, options)?;
             fmu::run()
         }
-        "bench" => bench::run(bench::Mode::parse(options)?),
+        "bench" => bench::run(Mode::parse(command, options)?),
         "bench-run" => bench::run_round(bench::parse_round(options)?),
+        "sweep" => sweep::run(Mode::parse(command, options)?),
+        "sweep-case" => sweep::run_case(options),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }
@@ -106,6 +109,32 @@ fn no_options(command: &str, options: &[String]) -> Result {
             Err(format!("`{command}` takes no option `{option}`; run `cargo xtask help`").into())
         }
     }
+}
+
+/// The full run of a long command or its `--quick` subset (`bench`, `sweep`).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Mode {
+    Full,
+    Quick,
+}
+
+impl Mode {
+    /// No option: full; `--quick`: quick; anything else names `command` in its error.
+    pub fn parse(command: &str, options: &[String]) -> Result<Mode> {
+        match options {
+            [] => Ok(Mode::Full),
+            [option] if option == "--quick" => Ok(Mode::Quick),
+            [option, ..] => {
+                Err(format!("`{command}` has no option `{option}` (only --quick)").into())
+            }
+        }
+    }
+}
+
+/// Writes `text` to `path`, naming the file in the error.
+fn write_text(path: &Path, text: &str) -> Result {
+    std::fs::write(path, text)
+        .map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
 }
 
 /// The workspace root: the parent of this crate's directory.

@@ -42,7 +42,7 @@ use beam_body::model::{BeamBody, DaeSystem, Formulation, TwoDofSystem};
 use beam_body::solver::OdeSystem;
 use nalgebra::{SMatrix, SVector};
 
-use crate::{cargo, project_root, python, relative, run_cmd, target_dir, Result};
+use crate::{cargo, project_root, python, relative, run_cmd, target_dir, write_text, Mode, Result};
 use problem::{state_names, Counters, Outcome, Problem, SCENES};
 
 /// The solvers that `bench-run` runs in-process.
@@ -55,22 +55,7 @@ const RAW_HEADER: &str = "round,solver,scene,rtol,h,time_s,steps,rejected,rhs_ev
                           lu_factorizations,newton_iters,status";
 const COSTS_HEADER: &str = "scene,rhs_ns,lu_ns,solve_ns";
 
-/// The full benchmark or the quick one.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    Full,
-    Quick,
-}
-
 impl Mode {
-    pub fn parse(options: &[String]) -> Result<Mode> {
-        match options {
-            [] => Ok(Mode::Full),
-            [option] if option == "--quick" => Ok(Mode::Quick),
-            [option, ..] => Err(format!("`bench` has no option `{option}` (only --quick)").into()),
-        }
-    }
-
     /// The time limit of one SciPy solve (`bench_scipy.py --max-seconds`).
     fn scipy_max_seconds(self) -> u32 {
         match self {
@@ -227,7 +212,7 @@ fn write_cases(path: &Path, cases: &[Case]) -> Result {
     for c in cases {
         writeln!(text, "{},{},{},{}", c.solver, c.scene, c.rtol, c.h).expect("String");
     }
-    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+    write_text(path, &text)
 }
 
 fn read_cases(path: &Path) -> Result<Vec<Case>> {

@@ -1,0 +1,624 @@
+//! `cargo xtask sweep [--quick]`: stiff and extreme cases, each run against a reference, and
+//! `sweep-case ID`, one case in its own process.
+//!
+//! Every case runs in a child process (`xtask sweep-case ID`) under a wall-clock limit, so a
+//! hang, a crash or a runaway case ends as a status of its row, never as a stuck sweep. The
+//! child prints one tab-separated result line; the parent writes `target/sweep/sweep.csv`
+//! and `target/sweep/sweep.md`.
+//!
+//! The reference of a case is the same formulation's equations integrated by an explicit
+//! Dormand–Prince 5(4) pair ([`reference`]) at rtol 1e-12: it shares only the right-hand side
+//! with the BDF. The error, as in the benchmark, is the RMS over the output grid and over
+//! v1, ϑ1, v̇1, ϑ̇1 of (y − y_ref)/max|y_ref|, with the maximum alongside.
+
+pub mod reference;
+
+use std::fmt::Write as _;
+use std::fs;
+use std::io::Read as _;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use beam_body::model::{BeamBody, DaeSystem, Formulation, PaperLaw, PhiPiece, TwoDofSystem};
+use beam_body::sim::{simulate, Scene};
+use beam_body::solver::OdeSystem;
+use nalgebra::SVector;
+
+use crate::{cargo, relative, run_cmd, target_dir, write_text, Mode, Result};
+use reference::Dopri5;
+
+/// What a case is expected to do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Expect {
+    /// Succeed with an error at most this (relative RMS against the reference).
+    Accurate(f64),
+    /// Stop with a clear message containing this text.
+    Fails(&'static str),
+    /// Run to the end with finite outputs; no reference (a horizon too long for one).
+    Completes,
+    /// Either as `Accurate`, or stop with a clear message containing the text (a drive so
+    /// violent that the beam may leave the model's range).
+    AccurateOrStops(f64, &'static str),
+}
+
+/// What the integrator says when the beam leaves the model's range of validity.
+const RANGE_MESSAGE: &str = "outside the model's range of validity";
+
+/// One row of the sweep.
+#[derive(Clone, Debug)]
+pub struct Case {
+    pub group: &'static str,
+    pub name: String,
+    pub scene: Scene,
+    pub expect: Expect,
+    /// In the quick subset that `cargo xtask test` runs.
+    pub quick: bool,
+}
+
+/// The accuracy expected of a run: 20·rtol per period of the fastest mode over the horizon
+/// (at least 50 periods). On an undamped oscillation the global error of any
+/// tolerance-controlled integrator is mostly phase error, which grows linearly with the
+/// number of periods: measured 2.5·rtol per period on the paper's scene (56 periods of its
+/// 0.18 s mode, error 1.4e-4 at rtol 1e-6) and about 6·rtol per period at EI × 10⁴.
+fn accurate(scene: &Scene) -> Expect {
+    let periods =
+        fastest_omega(scene).map_or(0.0, |w| w * scene.t_end / (2.0 * std::f64::consts::PI));
+    Expect::Accurate(20.0 * scene.solver.rtol * periods.max(50.0))
+}
+
+/// The fastest angular frequency of small oscillations about the equilibrium at φ = 0.
+fn fastest_omega(scene: &Scene) -> Option<f64> {
+    let w2 = BeamBody::new(scene.params).ok()?.modes(0.0).omega2[1];
+    (w2 > 0.0).then(|| w2.sqrt())
+}
+
+fn paper() -> Scene {
+    Scene { t_end: 10.2, dt_out: 0.0085, ..Scene::default() }
+}
+
+fn case(group: &'static str, name: String, scene: Scene, quick: bool) -> Case {
+    let expect = accurate(&scene);
+    Case { group, name, scene, expect, quick }
+}
+
+/// The static buckling value of g < 0 (compression along the beam): where the lowest
+/// squared frequency about the equilibrium at φ = 0 crosses zero, by bisection.
+pub fn buckling_g(base: &Scene) -> f64 {
+    let omega2 = |g: f64| {
+        let mut params = base.params;
+        params.g = g;
+        BeamBody::new(params).map(|m| m.modes(0.0).omega2[0]).unwrap_or(f64::NAN)
+    };
+    let (mut lo, mut hi) = (0.0, -1.0);
+    while omega2(hi) > 0.0 && hi > -1e12 {
+        lo = hi;
+        hi *= 2.0;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if omega2(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The case list, in a fixed order (a case's id is its index).
+pub fn cases() -> Vec<Case> {
+    let mut list = Vec::new();
+    let formulations = [Formulation::Reduced, Formulation::DaeStabilized];
+    // Stiffness: EI from 0.1 to 10⁷ times the paper's.
+    for (k, factor) in [1e-1, 1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7].into_iter().enumerate() {
+        for f in formulations {
+            let mut s = paper();
+            s.params.ei *= factor;
+            s.formulation = f;
+            let quick = f == Formulation::Reduced && matches!(k, 1 | 5 | 8);
+            list.push(case("stiffness", format!("EI x {factor:e}"), s, quick));
+        }
+    }
+    // Mass and inertia.
+    let mut masses: Vec<(String, Scene)> = Vec::new();
+    let mut s = paper();
+    s.params.m = 1e-6;
+    masses.push(("m = 1e-6 (massless beam)".into(), s));
+    let mut s = paper();
+    s.params.j_c = 0.0;
+    masses.push(("J_C = 0 (point mass at r)".into(), s));
+    let mut s = paper();
+    s.params.r = 0.0;
+    masses.push(("r = 0".into(), s));
+    for factor in [1e-3, 1e-2, 1e-1, 1e1, 1e2, 1e3] {
+        let mut s = paper();
+        s.params.m2 *= factor;
+        masses.push((format!("M2 x {factor:e}"), s));
+    }
+    for (i, (name, s)) in masses.into_iter().enumerate() {
+        for f in formulations {
+            let scene = Scene { formulation: f, ..s.clone() };
+            list.push(case("mass", name.clone(), scene, i == 0 && f == Formulation::Reduced));
+        }
+    }
+    // Violent turns.
+    for t_rot in [0.85, 0.2, 0.05] {
+        for turns in [1.0, 4.0, 10.0] {
+            let mut s = paper();
+            s.law =
+                PaperLaw { t_rot, phi_end: turns * std::f64::consts::PI, ..PaperLaw::default() };
+            let quick = t_rot == 0.05 && turns == 10.0;
+            let mut c = case("turn", format!("t_rot = {t_rot} s, phi_end = {turns} pi"), s, quick);
+            if let Expect::Accurate(bound) = c.expect {
+                c.expect = Expect::AccurateOrStops(bound, RANGE_MESSAGE);
+            }
+            list.push(c);
+        }
+    }
+    // Gravity: none, and reversed below and above the buckling load.
+    let mut s = paper();
+    s.params.g = 0.0;
+    list.push(case("gravity", "g = 0".into(), s, false));
+    let g_cr = buckling_g(&paper());
+    for (ratio, quick) in [(0.9, false), (1.1, true)] {
+        let mut s = paper();
+        s.params.g = ratio * g_cr;
+        s.law.phi_end = 0.0;
+        s.initial.v1 = 1e-3;
+        let name = format!("g = {ratio} g_cr = {:.4} m/s^2 (reversed)", ratio * g_cr);
+        let mut c = case("gravity", name, s, quick);
+        if ratio > 1.0 {
+            c.expect = Expect::Fails(RANGE_MESSAGE);
+        }
+        list.push(c);
+    }
+    // Tolerances.
+    for k in 2..=13 {
+        let rtol = 10f64.powi(-k);
+        let mut s = paper();
+        s.solver.rtol = rtol;
+        let quick = k == 2 || k == 13;
+        let mut c = case("tolerance", format!("rtol = 1e-{k}"), s, quick);
+        // The reference's own error (rtol 1e-12) and round-off bound what can be shown.
+        if let Expect::Accurate(bound) = c.expect {
+            c.expect = Expect::Accurate(bound.max(1e-8));
+        }
+        list.push(c);
+    }
+    // The stability guard, on and off, over stiffness and tolerance.
+    for factor in [1e2, 1e3, 1e4, 1e5] {
+        for k in 3..=5 {
+            for guard in [true, false] {
+                let mut s = paper();
+                s.params.ei *= factor;
+                s.solver.rtol = 10f64.powi(-k);
+                s.solver.stability_guard = guard;
+                let on = if guard { "on" } else { "off" };
+                let name = format!("EI x {factor:e}, rtol 1e-{k}, guard {on}");
+                list.push(case("guard", name, s, factor == 1e4 && k == 4));
+            }
+        }
+    }
+    // A long horizon: the paper's turn, then 10⁴ s at constant φ (energy is conserved).
+    for f in
+        [Formulation::Reduced, Formulation::Dae, Formulation::DaeStabilized, Formulation::Linear]
+    {
+        let s = Scene { t_end: 1e4, dt_out: 1.0, formulation: f, ..paper() };
+        let name = "t_end = 1e4 s".to_string();
+        list.push(Case {
+            group: "horizon",
+            name,
+            scene: s,
+            expect: Expect::Completes,
+            quick: false,
+        });
+    }
+    list
+}
+
+/// The measured outcome of a case.
+#[derive(Clone, Debug, Default)]
+pub struct Row {
+    pub status: String,
+    pub error: f64,
+    pub max_error: f64,
+    /// The RMS error over v1 and ϑ1 only.
+    pub position_error: f64,
+    pub drift: f64,
+    /// (E(t_end) − E)/|E| with E the energy at the first output after the turn.
+    pub energy_drift: f64,
+    pub steps: u64,
+    pub rejected: u64,
+    pub time_s: f64,
+    pub stiffness: f64,
+    pub message: String,
+}
+
+/// The stiffness ratio of a scene: the fastest frequency of small oscillations about the
+/// equilibrium at φ = 0 against the rate of the turn, ω_max·t_rot (radians of the fastest
+/// mode per turn time; the paper's scene: 29). Both beam modes scale alike with EI, so
+/// their ratio stays near 10 and does not measure stiffness.
+fn stiffness_ratio(scene: &Scene) -> f64 {
+    fastest_omega(scene).map_or(f64::NAN, |w| w * scene.law.t_rot)
+}
+
+/// Runs the reference of `scene` on its output grid: the states (v1, ϑ1, v̇1, ϑ̇1) per grid
+/// time, the law's two smooth pieces integrated separately.
+fn reference_solution(
+    scene: &Scene,
+    model: &BeamBody,
+) -> std::result::Result<Vec<[f64; 4]>, String> {
+    let grid: Vec<f64> = scene.output_times().collect();
+    let law = scene.law;
+    let i = scene.initial;
+    let (rtol, atol, max_steps) = (1e-12, 1e-15, 50_000_000);
+    let mut out = Vec::with_capacity(grid.len());
+    if scene.formulation.is_dae() {
+        let stabilized = scene.formulation == Formulation::DaeStabilized;
+        let sys0 = DaeSystem { model, phi: law.piece_from(0.0), stabilized };
+        let y0 =
+            sys0.consistent(&SVector::<f64, 6>::new(i.v1, i.theta1, 0.0, i.dv1, i.dtheta1, 0.0));
+        let mut r = Dopri5::new(0.0, y0, rtol, atol, max_steps);
+        for &t in &grid {
+            advance_piecewise(&mut r, t, law, |phi| DaeSystem { model, phi, stabilized })?;
+            out.push([r.y[0], r.y[1], r.y[3], r.y[4]]);
+        }
+    } else {
+        let linear = scene.formulation == Formulation::Linear;
+        let y0 = SVector::<f64, 4>::new(i.v1, i.theta1, i.dv1, i.dtheta1);
+        let mut r = Dopri5::new(0.0, y0, rtol, atol, max_steps);
+        for &t in &grid {
+            advance_piecewise(&mut r, t, law, |phi| TwoDofSystem { model, phi, linear })?;
+            out.push([r.y[0], r.y[1], r.y[2], r.y[3]]);
+        }
+    }
+    Ok(out)
+}
+
+/// Advances the reference to `t`, stopping at the law's breakpoint t_rot on the way so that
+/// each step sees one smooth piece of φ.
+fn advance_piecewise<const N: usize, S: OdeSystem<N>>(
+    r: &mut Dopri5<N>,
+    t: f64,
+    law: PaperLaw,
+    system: impl Fn(PhiPiece) -> S,
+) -> std::result::Result<(), String> {
+    if r.t < law.t_rot && t > law.t_rot {
+        r.advance(&system(law.piece_from(r.t)), law.t_rot).map_err(|e| e.to_string())?;
+    }
+    r.advance(&system(law.piece_from(r.t)), t).map_err(|e| e.to_string())
+}
+
+/// `sweep-case ID`: runs one case and prints its result line.
+pub fn run_case(options: &[String]) -> Result {
+    let id: usize = match options {
+        [id] => id.parse().map_err(|_| format!("`sweep-case` takes a case number, not `{id}`"))?,
+        _ => return Err("usage: sweep-case ID".into()),
+    };
+    let list = cases();
+    let case = list.get(id).ok_or_else(|| format!("no case {id} (there are {})", list.len()))?;
+    let row = measure(case);
+    println!("{}", row_fields(&row).join("\t"));
+    Ok(())
+}
+
+/// Runs the case in this process.
+fn measure(case: &Case) -> Row {
+    let scene = &case.scene;
+    let mut row = Row { stiffness: stiffness_ratio(scene), ..Row::default() };
+    let model = match scene.validate() {
+        Ok(m) => m,
+        Err(e) => {
+            row.status = "invalid".into();
+            row.message = e.to_string();
+            return row;
+        }
+    };
+    let mut states: Vec<[f64; 4]> = Vec::new();
+    let mut drift: f64 = 0.0;
+    let mut non_finite = false;
+    // Energy at the first output after the turn and at the last: φ is constant in between.
+    let (mut e_after_turn, mut e_end) = (None, f64::NAN);
+    let start = Instant::now();
+    let result = simulate(scene, |o| {
+        let s = [o.v1, o.theta1, o.dv1, o.dtheta1];
+        non_finite |= !s.iter().all(|v| v.is_finite());
+        drift = drift.max(o.drift.abs());
+        states.push(s);
+        if o.t >= scene.law.t_rot && e_after_turn.is_none() {
+            e_after_turn = Some(o.energy);
+        }
+        e_end = o.energy;
+    });
+    row.time_s = start.elapsed().as_secs_f64();
+    row.drift = drift;
+    row.energy_drift = match e_after_turn {
+        Some(e0) if e0 != 0.0 => (e_end - e0) / e0.abs(),
+        _ => f64::NAN,
+    };
+    match result {
+        Ok(stats) => {
+            row.steps = stats.steps;
+            row.rejected = stats.rejected();
+        }
+        Err(e) => {
+            row.message = e.to_string();
+            row.status = match case.expect {
+                Expect::Fails(text) | Expect::AccurateOrStops(_, text)
+                    if row.message.contains(text) =>
+                {
+                    "stopped (expected)".into()
+                }
+                _ => "failed".into(),
+            };
+            return row;
+        }
+    }
+    if non_finite {
+        row.status = "NaN".into();
+        row.message = "a reported output is not finite".into();
+        return row;
+    }
+    match case.expect {
+        Expect::Completes => {
+            row.status = "ok".into();
+            row.error = f64::NAN;
+            row.max_error = f64::NAN;
+            row.position_error = f64::NAN;
+            return row;
+        }
+        Expect::Fails(_) => {
+            row.status = "unexpected".into();
+            row.message = "ran to the end although a failure was expected".into();
+            return row;
+        }
+        Expect::Accurate(_) | Expect::AccurateOrStops(..) => {}
+    }
+    let bound = match case.expect {
+        Expect::Accurate(b) | Expect::AccurateOrStops(b, _) => b,
+        _ => f64::INFINITY,
+    };
+    match reference_solution(scene, &model) {
+        Ok(reference) => {
+            let (rms, max) = relative_error(&states, &reference, &[0, 1, 2, 3]);
+            row.position_error = relative_error(&states, &reference, &[0, 1]).0;
+            row.error = rms;
+            row.max_error = max;
+            row.status = if rms <= bound {
+                "ok".into()
+            } else {
+                row.message = format!("error {rms:.2e} above the expected {bound:.1e}");
+                "inaccurate".into()
+            };
+        }
+        Err(e) => {
+            row.status = "no reference".into();
+            row.message = format!("reference: {e}");
+        }
+    }
+    row
+}
+
+/// RMS and maximum over the grid and the components `components` of (y − y_ref)/max|y_ref|.
+fn relative_error(ours: &[[f64; 4]], reference: &[[f64; 4]], components: &[usize]) -> (f64, f64) {
+    let n = ours.len().min(reference.len());
+    let mut sum = 0.0;
+    let mut max: f64 = 0.0;
+    for &c in components {
+        let scale = reference.iter().map(|r| r[c].abs()).fold(0.0, f64::max).max(1e-300);
+        for k in 0..n {
+            let d = (ours[k][c] - reference[k][c]).abs() / scale;
+            sum += d * d;
+            max = max.max(d);
+        }
+    }
+    ((sum / (components.len() * n.max(1)) as f64).sqrt(), max)
+}
+
+const CSV_HEADER: &str =
+    "id,group,case,formulation,status,error,max_error,position_error,drift,energy_drift,steps,rejected,time_s,stiffness_ratio,message";
+
+fn row_fields(row: &Row) -> Vec<String> {
+    vec![
+        row.status.clone(),
+        format!("{:e}", row.error),
+        format!("{:e}", row.max_error),
+        format!("{:e}", row.position_error),
+        format!("{:e}", row.drift),
+        format!("{:e}", row.energy_drift),
+        row.steps.to_string(),
+        row.rejected.to_string(),
+        format!("{:e}", row.time_s),
+        format!("{:e}", row.stiffness),
+        row.message.replace(['\t', '\n'], " "),
+    ]
+}
+
+fn parse_row(line: &str) -> Option<Row> {
+    let f: Vec<&str> = line.trim_end_matches(['\n', '\r']).split('\t').collect();
+    if f.len() != 11 {
+        return None;
+    }
+    Some(Row {
+        status: f[0].to_string(),
+        error: f[1].parse().ok()?,
+        max_error: f[2].parse().ok()?,
+        position_error: f[3].parse().ok()?,
+        drift: f[4].parse().ok()?,
+        energy_drift: f[5].parse().ok()?,
+        steps: f[6].parse().ok()?,
+        rejected: f[7].parse().ok()?,
+        time_s: f[8].parse().ok()?,
+        stiffness: f[9].parse().ok()?,
+        message: f[10].to_string(),
+    })
+}
+
+/// Runs `xtask sweep-case ID` under a wall-clock limit.
+fn run_child(exe: &std::path::Path, id: usize, limit: Duration) -> Row {
+    let mut child = match Command::new(exe)
+        .args(["sweep-case", &id.to_string()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+    {
+        Ok(c) => c,
+        Err(e) => {
+            return Row { status: "crashed".into(), message: e.to_string(), ..Row::default() }
+        }
+    };
+    let start = Instant::now();
+    loop {
+        match child.try_wait() {
+            Ok(Some(status)) => {
+                let mut out = String::new();
+                let mut err = String::new();
+                if let Some(mut s) = child.stdout.take() {
+                    let _ = s.read_to_string(&mut out);
+                }
+                if let Some(mut s) = child.stderr.take() {
+                    let _ = s.read_to_string(&mut err);
+                }
+                return match (status.success(), parse_row(&out)) {
+                    (true, Some(row)) => row,
+                    _ => Row {
+                        status: "crashed".into(),
+                        message: format!("exit {status}: {}", err.trim().replace('\n', " ")),
+                        ..Row::default()
+                    },
+                };
+            }
+            Ok(None) if start.elapsed() > limit => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Row {
+                    status: "timeout".into(),
+                    message: format!("killed after {} s", limit.as_secs()),
+                    time_s: start.elapsed().as_secs_f64(),
+                    ..Row::default()
+                };
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(5)),
+            Err(e) => {
+                return Row { status: "crashed".into(), message: e.to_string(), ..Row::default() }
+            }
+        }
+    }
+}
+
+/// `cargo xtask sweep [--quick]`.
+pub fn run(mode: Mode) -> Result {
+    run_cmd(&mut cargo(["build", "--release", "-p", "xtask"]))?;
+    let exe = target_dir().join("release").join("xtask");
+    let list = cases();
+    let selected: Vec<usize> =
+        (0..list.len()).filter(|&i| mode == Mode::Full || list[i].quick).collect();
+    let limit = Duration::from_secs(if mode == Mode::Full { 600 } else { 60 });
+    let out_dir = target_dir().join("sweep");
+    fs::create_dir_all(&out_dir)
+        .map_err(|e| format!("cannot create {}: {e}", relative(&out_dir)))?;
+    let mut csv = format!("{CSV_HEADER}\n");
+    let start = Instant::now();
+    // Children run two (or as many as there are cores) at a time; rows keep the case order.
+    let jobs = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let done = std::sync::Mutex::new(Vec::<(usize, Row)>::new());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| loop {
+                let n = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let Some(&id) = selected.get(n) else { break };
+                let row = run_child(&exe, id, limit);
+                let c = &list[id];
+                let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
+                done.push((id, row.clone()));
+                eprintln!(
+                    "[{}/{}] {:<9} {:<42} {:<14} {:<18} error {:.2e}  {:.3} s",
+                    done.len(),
+                    selected.len(),
+                    c.group,
+                    c.name,
+                    c.scene.formulation.name(),
+                    row.status,
+                    row.error,
+                    row.time_s
+                );
+            });
+        }
+    });
+    let mut rows = done.into_inner().unwrap_or_else(|e| e.into_inner());
+    rows.sort_by_key(|(id, _)| *id);
+    for (id, row) in &rows {
+        let c = &list[*id];
+        let fields: Vec<String> =
+            row_fields(row)
+                .iter()
+                .map(|f| {
+                    if f.contains(',') {
+                        format!("\"{}\"", f.replace('"', "'"))
+                    } else {
+                        f.clone()
+                    }
+                })
+                .collect();
+        let _ = writeln!(
+            csv,
+            "{id},{},\"{}\",{},{}",
+            c.group,
+            c.name,
+            c.scene.formulation.name(),
+            fields.join(",")
+        );
+    }
+    let csv_path = out_dir.join("sweep.csv");
+    write_text(&csv_path, &csv)?;
+    let md_path = out_dir.join("sweep.md");
+    write_text(&md_path, &markdown(&list, &rows))?;
+    eprintln!(
+        "sweep: {} cases in {:.1} s; wrote {} and {}",
+        rows.len(),
+        start.elapsed().as_secs_f64(),
+        relative(&csv_path),
+        relative(&md_path)
+    );
+    let bad: Vec<String> = rows
+        .iter()
+        .filter(|(_, r)| !matches!(r.status.as_str(), "ok" | "stopped (expected)"))
+        .map(|(id, r)| format!("case {id} ({}): {} {}", list[*id].name, r.status, r.message))
+        .collect();
+    if mode == Mode::Quick && !bad.is_empty() {
+        return Err(format!("sweep cases not as expected:\n  {}", bad.join("\n  ")).into());
+    }
+    Ok(())
+}
+
+fn markdown(list: &[Case], rows: &[(usize, Row)]) -> String {
+    let mut md = String::from(
+        "| group | case | formulation | status | error | position error | max error | \
+         drift [m] | energy drift | steps | rejected | time | ω_max·t_rot | message |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let num = |x: f64| if x.is_nan() { "—".to_string() } else { format!("{x:.2e}") };
+    for (id, r) in rows {
+        let c = &list[*id];
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} s | {} | {} |",
+            c.group,
+            c.name,
+            c.scene.formulation.name(),
+            r.status,
+            num(r.error),
+            num(r.position_error),
+            num(r.max_error),
+            num(r.drift),
+            num(r.energy_drift),
+            r.steps,
+            r.rejected,
+            r.time_s,
+            num(r.stiffness),
+            r.message
+        );
+    }
+    md
+}
