@@ -27,8 +27,12 @@ pub fn extracted_dir() -> PathBuf {
 /// Builds and packages the FMU (as `cargo xtask fmu` does) and extracts it to a clean
 /// [`extracted_dir`], so the benchmark runs exactly the packaged binary.
 pub fn prepare() -> Result<PathBuf> {
+    prepare_at(extracted_dir())
+}
+
+/// Builds and packages the FMU and extracts it to a clean `dir`.
+pub fn prepare_at(dir: PathBuf) -> Result<PathBuf> {
     let (fmu, _library) = crate::fmu::build_package()?;
-    let dir = extracted_dir();
     if dir.exists() {
         fs::remove_dir_all(&dir)
             .map_err(|err| format!("cannot remove {}: {err}", relative(&dir)))?;
@@ -74,7 +78,7 @@ fn state_vrs(f: Formulation) -> Vec<u32> {
 }
 
 /// The value of an enumeration item: its 1-based position.
-fn item(items: &[(&str, &str)], name: &str) -> Result<i32> {
+pub fn item(items: &[(&str, &str)], name: &str) -> Result<i32> {
     let position = items.iter().position(|(item, _)| *item == name);
     Ok(position.ok_or_else(|| format!("the FMU has no enumeration item `{name}`"))? as i32 + 1)
 }

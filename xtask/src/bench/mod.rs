@@ -24,7 +24,7 @@
 mod cvode;
 #[cfg(feature = "bench")]
 mod diffsol;
-mod fmu;
+pub mod fmu;
 mod ours;
 pub mod problem;
 mod sundials_build;

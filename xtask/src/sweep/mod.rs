@@ -11,6 +11,7 @@
 //! with the BDF. The error, as in the benchmark, is the RMS over the output grid and over
 //! v1, ϑ1, v̇1, ϑ̇1 of (y − y_ref)/max|y_ref|, with the maximum alongside.
 
+pub mod fmu;
 pub mod reference;
 
 use std::fmt::Write as _;
@@ -39,6 +40,8 @@ pub enum Expect {
     /// Either as `Accurate`, or stop with a clear message containing the text (a drive so
     /// violent that the beam may leave the model's range).
     AccurateOrStops(f64, &'static str),
+    /// As `Completes`, or stop with a message containing the text ("" for any message).
+    CompletesOrStops(&'static str),
 }
 
 /// What the integrator says when the beam leaves the model's range of validity.
@@ -53,6 +56,8 @@ pub struct Case {
     pub expect: Expect,
     /// In the quick subset that `cargo xtask test` runs.
     pub quick: bool,
+    /// Through the packaged FMU instead of the standalone driver.
+    pub fmu: Option<fmu::FmuRun>,
 }
 
 /// The accuracy expected of a run: 20·rtol per period of the fastest mode over the horizon
@@ -78,7 +83,7 @@ fn paper() -> Scene {
 
 fn case(group: &'static str, name: String, scene: Scene, quick: bool) -> Case {
     let expect = accurate(&scene);
-    Case { group, name, scene, expect, quick }
+    Case { group, name, scene, expect, quick, fmu: None }
 }
 
 /// The static buckling value of g < 0 (compression along the beam): where the lowest
@@ -211,6 +216,33 @@ pub fn cases() -> Vec<Case> {
             scene: s,
             expect: Expect::Completes,
             quick: false,
+            fmu: None,
+        });
+    }
+    // Communication steps through the FMU, φ from the law: at most 2·10⁴ steps (a shorter
+    // horizon for the smallest), about 10³ recorded points.
+    for (k, h) in [1e-6f64, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0].into_iter().enumerate() {
+        let wanted = ((10.2 / h).ceil() as usize).min(20_000);
+        let stride = wanted.div_ceil(1000);
+        let n = stride * wanted.div_ceil(stride);
+        let s = Scene { t_end: n as f64 * h, dt_out: stride as f64 * h, ..paper() };
+        let name = format!("FMU, H = {h:e} s, t_end = {:.4} s", s.t_end);
+        let mut c = case("communication", name, s, k == 2);
+        c.fmu = Some(fmu::FmuRun { h, stride, phi: fmu::FmuPhi::Law });
+        list.push(c);
+    }
+    // A step in the φ input (values only): an infinite acceleration, which the FMU smooths
+    // over one communication step (its Hermite reconstruction).
+    for jump in [0.01, 0.1, 1.0, 10.0, 1e3] {
+        let s = Scene { t_end: 3.0, dt_out: 0.01, ..paper() };
+        let how = fmu::FmuRun { h: 0.01, stride: 1, phi: fmu::FmuPhi::Step { t_jump: 1.0, jump } };
+        list.push(Case {
+            group: "phi step",
+            name: format!("FMU, phi jumps by {jump:e} rad at t = 1 s, H = 0.01 s"),
+            scene: s,
+            expect: Expect::CompletesOrStops(""),
+            quick: jump == 1e3,
+            fmu: Some(how),
         });
     }
     list
@@ -320,6 +352,19 @@ fn measure(case: &Case) -> Row {
     // Energy at the first output after the turn and at the last: φ is constant in between.
     let (mut e_after_turn, mut e_end) = (None, f64::NAN);
     let start = Instant::now();
+    if let Some(how) = &case.fmu {
+        let result = fmu::run(scene, how);
+        row.time_s = start.elapsed().as_secs_f64();
+        row.drift = f64::NAN;
+        row.energy_drift = f64::NAN;
+        return match result {
+            Ok(recorded) => {
+                let states: Vec<[f64; 4]> = recorded.iter().map(|(_, y)| *y).collect();
+                judge(case, &model, states, row)
+            }
+            Err(message) => stopped(case, message, row),
+        };
+    }
     let result = simulate(scene, |o| {
         let s = [o.v1, o.theta1, o.dv1, o.dtheta1];
         non_finite |= !s.iter().all(|v| v.is_finite());
@@ -341,26 +386,40 @@ fn measure(case: &Case) -> Row {
             row.steps = stats.steps;
             row.rejected = stats.rejected();
         }
-        Err(e) => {
-            row.message = e.to_string();
-            row.status = match case.expect {
-                Expect::Fails(text) | Expect::AccurateOrStops(_, text)
-                    if row.message.contains(text) =>
-                {
-                    "stopped (expected)".into()
-                }
-                _ => "failed".into(),
-            };
-            return row;
-        }
+        Err(e) => return stopped(case, e.to_string(), row),
     }
     if non_finite {
         row.status = "NaN".into();
         row.message = "a reported output is not finite".into();
         return row;
     }
+    judge(case, &model, states, row)
+}
+
+/// The row of a run that stopped with `message`.
+fn stopped(case: &Case, message: String, mut row: Row) -> Row {
+    row.status = match case.expect {
+        Expect::Fails(text) | Expect::AccurateOrStops(_, text) | Expect::CompletesOrStops(text)
+            if message.contains(text) =>
+        {
+            "stopped (expected)".into()
+        }
+        _ => "failed".into(),
+    };
+    row.message = message;
+    row
+}
+
+/// The row of a run that reached its end with `states` on the scene's output grid.
+fn judge(case: &Case, model: &BeamBody, states: Vec<[f64; 4]>, mut row: Row) -> Row {
+    let scene = &case.scene;
+    if !states.iter().flatten().all(|v| v.is_finite()) {
+        row.status = "NaN".into();
+        row.message = "a reported output is not finite".into();
+        return row;
+    }
     match case.expect {
-        Expect::Completes => {
+        Expect::Completes | Expect::CompletesOrStops(_) => {
             row.status = "ok".into();
             row.error = f64::NAN;
             row.max_error = f64::NAN;
@@ -378,7 +437,7 @@ fn measure(case: &Case) -> Row {
         Expect::Accurate(b) | Expect::AccurateOrStops(b, _) => b,
         _ => f64::INFINITY,
     };
-    match reference_solution(scene, &model) {
+    match reference_solution(scene, model) {
         Ok(reference) => {
             let (rms, max) = relative_error(&states, &reference, &[0, 1, 2, 3]);
             row.position_error = relative_error(&states, &reference, &[0, 1]).0;
@@ -508,6 +567,7 @@ fn run_child(exe: &std::path::Path, id: usize, limit: Duration) -> Row {
 
 /// `cargo xtask sweep [--quick]`.
 pub fn run(mode: Mode) -> Result {
+    crate::bench::fmu::prepare_at(fmu::extracted_dir())?;
     run_cmd(&mut cargo(["build", "--release", "-p", "xtask"]))?;
     let exe = target_dir().join("release").join("xtask");
     let list = cases();

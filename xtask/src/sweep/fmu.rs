@@ -1,0 +1,101 @@
+//! The sweep's cases that go through the packaged FMU (`target/sweep/fmu/BeamBody/`, loaded
+//! by the native host): communication steps from 1e-6 s to 10 s with φ from the law, and a
+//! step in the φ input.
+
+use std::path::PathBuf;
+
+use beam_body::fmi2::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
+use beam_body::sim::Scene;
+
+use crate::bench::fmu::item;
+use crate::host::{Fmu2, Status};
+use crate::target_dir;
+
+/// How φ reaches the FMU.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FmuPhi {
+    /// phi_source = law (the scene's turn).
+    Law,
+    /// phi_source = input, values only: 0 before `t_jump`, `jump` from then on.
+    Step { t_jump: f64, jump: f64 },
+}
+
+/// An FMU run: communication step `h` from 0 to the scene's t_end (a multiple of `h`),
+/// recording every `stride`-th communication point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FmuRun {
+    pub h: f64,
+    pub stride: usize,
+    pub phi: FmuPhi,
+}
+
+/// Where `cargo xtask sweep` extracts the FMU.
+pub fn extracted_dir() -> PathBuf {
+    target_dir().join("sweep").join("fmu").join(MODEL_IDENTIFIER)
+}
+
+/// Runs the scene through the FMU: the recorded times and states (v1, ϑ1, v̇1, ϑ̇1), or the
+/// FMU's message when a step is discarded (with the states up to there).
+pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<(f64, [f64; 4])>, String> {
+    let fmu = Fmu2::load(&extracted_dir()).map_err(|e| format!("loading the FMU: {e}"))?;
+    let source = match how.phi {
+        FmuPhi::Law => "law",
+        FmuPhi::Step { .. } => "input",
+    };
+    let text = |e: Box<dyn std::error::Error>| e.to_string();
+    let source = item(PHI_SOURCE_TYPE.items, source).map_err(text)?;
+    let formulation =
+        item(FORMULATION_TYPE.items, &scene.formulation.name().replace('-', "_")).map_err(text)?;
+    let p = &scene.params;
+    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, false).map_err(text)?;
+    instance
+        .set_integer(&[Var::PhiSource.vr(), Var::Formulation.vr()], &[source, formulation])
+        .map_err(text)?;
+    let reals = [
+        (Var::L, p.l),
+        (Var::Ei, p.ei),
+        (Var::M, p.m),
+        (Var::M2, p.m2),
+        (Var::JC, p.j_c),
+        (Var::R, p.r),
+        (Var::G, p.g),
+        (Var::TRot, scene.law.t_rot),
+        (Var::PhiEnd, scene.law.phi_end),
+    ];
+    let vrs: Vec<u32> = reals.iter().map(|(v, _)| v.vr()).collect();
+    let values: Vec<f64> = reals.iter().map(|(_, x)| *x).collect();
+    instance.set_real(&vrs, &values).map_err(text)?;
+    let n = (scene.t_end / how.h).round() as u64;
+    instance.setup_experiment(Some(scene.solver.rtol), 0.0, None).map_err(text)?;
+    instance.enter_initialization_mode().map_err(text)?;
+    instance.exit_initialization_mode().map_err(text)?;
+    let states = [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1].map(|v| v.vr());
+    let mut out = Vec::new();
+    let mut record = |instance: &mut crate::host::Instance, t: f64| -> Result<(), String> {
+        let mut y = [0.0; 4];
+        instance.get_real(&states, &mut y).map_err(|e| e.to_string())?;
+        out.push((t, y));
+        Ok(())
+    };
+    record(&mut instance, 0.0)?;
+    for k in 0..n {
+        let tc = k as f64 * how.h;
+        if let FmuPhi::Step { t_jump, jump } = how.phi {
+            let phi = if tc >= t_jump { jump } else { 0.0 };
+            instance.set_real(&[Var::Phi.vr()], &[phi]).map_err(text)?;
+        }
+        let status = instance.do_step(tc, how.h, true).map_err(text)?;
+        if matches!(status, Status::Discard) {
+            let message = instance
+                .messages()
+                .last()
+                .map_or_else(|| "fmi2Discard without a message".to_string(), |m| m.to_string());
+            return Err(message);
+        }
+        if (k + 1) % how.stride as u64 == 0 {
+            record(&mut instance, (k + 1) as f64 * how.h)?;
+        }
+    }
+    instance.terminate().map_err(text)?;
+    Ok(out)
+}
