@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 
 use beam_body::fmi2::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
 use beam_body::model::Formulation;
+use beam_body::sim::Scene;
 use zip::ZipArchive;
 
 use super::problem::{Counters, Outcome, Problem};
@@ -67,6 +68,29 @@ pub fn run(
     solve(fmu, problem, rtol, h).map_err(|err| err.to_string())
 }
 
+/// Sets the scene's formulation, φ source (`"law"` or `"input"`), model parameters and law.
+pub fn set_scene(instance: &mut Instance, scene: &Scene, phi_source: &str) -> Result {
+    let source = item(PHI_SOURCE_TYPE.items, phi_source)?;
+    let formulation = item(FORMULATION_TYPE.items, &scene.formulation.name().replace('-', "_"))?;
+    instance.set_integer(&[Var::PhiSource.vr(), Var::Formulation.vr()], &[source, formulation])?;
+    let p = &scene.params;
+    let reals = [
+        (Var::L, p.l),
+        (Var::Ei, p.ei),
+        (Var::M, p.m),
+        (Var::M2, p.m2),
+        (Var::JC, p.j_c),
+        (Var::R, p.r),
+        (Var::G, p.g),
+        (Var::TRot, scene.law.t_rot),
+        (Var::PhiEnd, scene.law.phi_end),
+    ];
+    let vrs: Vec<u32> = reals.iter().map(|(v, _)| v.vr()).collect();
+    let values: Vec<f64> = reals.iter().map(|(_, x)| *x).collect();
+    instance.set_real(&vrs, &values)?;
+    Ok(())
+}
+
 /// Value references of the recorded states, in the contract's order.
 fn state_vrs(f: Formulation) -> Vec<u32> {
     let vars: &[Var] = if f.is_dae() {
@@ -78,7 +102,7 @@ fn state_vrs(f: Formulation) -> Vec<u32> {
 }
 
 /// The value of an enumeration item: its 1-based position.
-pub fn item(items: &[(&str, &str)], name: &str) -> Result<i32> {
+fn item(items: &[(&str, &str)], name: &str) -> Result<i32> {
     let position = items.iter().position(|(item, _)| *item == name);
     Ok(position.ok_or_else(|| format!("the FMU has no enumeration item `{name}`"))? as i32 + 1)
 }
@@ -109,26 +133,8 @@ fn solve(fmu: &Fmu2, problem: &Problem, rtol: f64, h: f64) -> Result<Outcome> {
     let scene = &problem.scene;
     let (points, at_grid) = communication_points(&problem.grid, h)?;
     let vrs = state_vrs(scene.formulation);
-    let law = item(PHI_SOURCE_TYPE.items, "law")?;
-    let formulation = item(FORMULATION_TYPE.items, &scene.formulation.name().replace('-', "_"))?;
-    let p = &scene.params;
-
     let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, false)?;
-    instance.set_integer(&[Var::PhiSource.vr(), Var::Formulation.vr()], &[law, formulation])?;
-    let reals = [
-        (Var::L, p.l),
-        (Var::Ei, p.ei),
-        (Var::M, p.m),
-        (Var::M2, p.m2),
-        (Var::JC, p.j_c),
-        (Var::R, p.r),
-        (Var::G, p.g),
-        (Var::TRot, scene.law.t_rot),
-        (Var::PhiEnd, scene.law.phi_end),
-    ];
-    let real_vrs: Vec<u32> = reals.iter().map(|(v, _)| v.vr()).collect();
-    let real_values: Vec<f64> = reals.iter().map(|(_, x)| *x).collect();
-    instance.set_real(&real_vrs, &real_values)?;
+    set_scene(&mut instance, scene, "law")?;
     instance.setup_experiment(Some(rtol), points[0], Some(*points.last().unwrap_or(&0.0)))?;
     instance.enter_initialization_mode()?;
     instance.exit_initialization_mode()?;

@@ -4,10 +4,10 @@
 
 use std::path::PathBuf;
 
-use beam_body::fmi2::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
+use beam_body::fmi2::variables::{Var, MODEL_IDENTIFIER};
 use beam_body::sim::Scene;
 
-use crate::bench::fmu::item;
+use crate::bench::fmu::set_scene;
 use crate::host::{Fmu2, Status};
 use crate::target_dir;
 
@@ -43,28 +43,8 @@ pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<(f64, [f64; 4])>, String> 
         FmuPhi::Step { .. } => "input",
     };
     let text = |e: Box<dyn std::error::Error>| e.to_string();
-    let source = item(PHI_SOURCE_TYPE.items, source).map_err(text)?;
-    let formulation =
-        item(FORMULATION_TYPE.items, &scene.formulation.name().replace('-', "_")).map_err(text)?;
-    let p = &scene.params;
     let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, false).map_err(text)?;
-    instance
-        .set_integer(&[Var::PhiSource.vr(), Var::Formulation.vr()], &[source, formulation])
-        .map_err(text)?;
-    let reals = [
-        (Var::L, p.l),
-        (Var::Ei, p.ei),
-        (Var::M, p.m),
-        (Var::M2, p.m2),
-        (Var::JC, p.j_c),
-        (Var::R, p.r),
-        (Var::G, p.g),
-        (Var::TRot, scene.law.t_rot),
-        (Var::PhiEnd, scene.law.phi_end),
-    ];
-    let vrs: Vec<u32> = reals.iter().map(|(v, _)| v.vr()).collect();
-    let values: Vec<f64> = reals.iter().map(|(_, x)| *x).collect();
-    instance.set_real(&vrs, &values).map_err(text)?;
+    set_scene(&mut instance, scene, source).map_err(text)?;
     let n = (scene.t_end / how.h).round() as u64;
     instance.setup_experiment(Some(scene.solver.rtol), 0.0, None).map_err(text)?;
     instance.enter_initialization_mode().map_err(text)?;
