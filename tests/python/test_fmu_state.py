@@ -35,8 +35,13 @@ def wave(t, a=0.5, w=3.0):
 
 
 def phi_shifted(t):
-    """Another input for the same interval (to dirty the instance between restores)."""
-    return wave(t, a=0.7, w=2.0)
+    """Another input from t = 3 on (to dirty the instance between restores): the wave plus
+    0.05 sin(2 (t - 3)), so it leaves the wave smoothly. (A jump at t = 3, as a different wave
+    would make, is non-physical: the beam it drives leaves the model's range and the FMU
+    discards the step.)"""
+    phi, dphi, ddphi = wave(t)
+    x = 2.0 * (t - 3.0)
+    return phi + 0.05 * math.sin(x), dphi + 0.1 * math.cos(x), ddphi - 0.2 * math.sin(x)
 
 
 def step(s, mode, k, phi_fn=wave):
