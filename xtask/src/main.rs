@@ -61,6 +61,14 @@ Commands:
           with --features bench): run the cases of target/bench/cases.csv in an order
           shuffled with seed K and append to target/bench/raw.csv; round 0 (the warm-up)
           also writes the solutions (target/bench/sol/) and target/bench/costs.csv.
+  sweep [--quick | --group NAME]
+          Stiff and extreme cases (first cut; target/sweep/sweep.{csv,md}): stiffness,
+          mass, turn, gravity, tolerance, guard, horizon, communication and phi step
+          groups, each case in a child process under a time limit, against an explicit
+          Dormand-Prince 5(4) reference. --quick: a subset that fails on an unexpected
+          status; --group: one group.
+  sweep-case ID
+          Run one sweep case and print its result line (used by `sweep`).
   help    Print this message.
 ";
 
@@ -96,7 +104,7 @@ fn run(args: &[String]) -> Result {
         }
         "bench" => bench::run(Mode::parse(command, options)?),
         "bench-run" => bench::run_round(bench::parse_round(options)?),
-        "sweep" => sweep::run(Mode::parse(command, options)?),
+        "sweep" => sweep::run(options),
         "sweep-case" => sweep::run_case(options),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }

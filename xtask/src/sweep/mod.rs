@@ -190,17 +190,27 @@ pub fn cases() -> Vec<Case> {
         }
         list.push(c);
     }
-    // The stability guard, on and off, over stiffness and tolerance.
-    for factor in [1e2, 1e3, 1e4, 1e5] {
-        for k in 3..=5 {
-            for guard in [true, false] {
-                let mut s = paper();
-                s.params.ei *= factor;
-                s.solver.rtol = 10f64.powi(-k);
-                s.solver.stability_guard = guard;
-                let on = if guard { "on" } else { "off" };
-                let name = format!("EI x {factor:e}, rtol 1e-{k}, guard {on}");
-                list.push(case("guard", name, s, factor == 1e4 && k == 4));
+    // The stability guard, on and off, over stiffness and tolerance: the paper's turn, and
+    // the free vibration from a deflection near the first mode's shape (φ fixed).
+    for free in [false, true] {
+        for factor in [1e2, 1e3, 1e4, 1e5] {
+            for k in 3..=6 {
+                for guard in [true, false] {
+                    let mut s = paper();
+                    s.params.ei *= factor;
+                    s.solver.rtol = 10f64.powi(-k);
+                    s.solver.stability_guard = guard;
+                    if free {
+                        s.law.phi_end = 0.0;
+                        s.initial.v1 = 0.01;
+                        s.initial.theta1 = 0.006;
+                    }
+                    let on = if guard { "on" } else { "off" };
+                    let what = if free { "free vibration" } else { "turn" };
+                    let name = format!("{what}, EI x {factor:e}, rtol 1e-{k}, guard {on}");
+                    let quick = !free && factor == 1e4 && k == 4;
+                    list.push(case("guard", name, s, quick));
+                }
             }
         }
     }
@@ -566,13 +576,24 @@ fn run_child(exe: &std::path::Path, id: usize, limit: Duration) -> Row {
 }
 
 /// `cargo xtask sweep [--quick]`.
-pub fn run(mode: Mode) -> Result {
+pub fn run(options: &[String]) -> Result {
+    let (mode, group) = match options {
+        [g, name] if g == "--group" => (Mode::Full, Some(name.as_str())),
+        _ => (Mode::parse("sweep", options)?, None),
+    };
     crate::bench::fmu::prepare_at(fmu::extracted_dir())?;
     run_cmd(&mut cargo(["build", "--release", "-p", "xtask"]))?;
     let exe = target_dir().join("release").join("xtask");
     let list = cases();
-    let selected: Vec<usize> =
-        (0..list.len()).filter(|&i| mode == Mode::Full || list[i].quick).collect();
+    let selected: Vec<usize> = (0..list.len())
+        .filter(|&i| match group {
+            Some(g) => list[i].group == g,
+            None => mode == Mode::Full || list[i].quick,
+        })
+        .collect();
+    if selected.is_empty() {
+        return Err(format!("no sweep case in group `{}`", group.unwrap_or("")).into());
+    }
     let limit = Duration::from_secs(if mode == Mode::Full { 600 } else { 60 });
     let out_dir = target_dir().join("sweep");
     fs::create_dir_all(&out_dir)
