@@ -40,6 +40,9 @@ pub fn run(scope: Scope) -> Result {
     let fmu = report.step("package BeamBody.fmu", || crate::fmu::build_package().map(|p| p.0));
     if scope == Scope::All {
         report.step("rust tests", rust_tests);
+        // The sweep's representative subset: every row must end as expected (ok within its
+        // error bound, or stopped with the expected message).
+        report.step("sweep --quick", || crate::sweep::run(&["--quick".to_string()]));
     }
     match (python, binary, fmu) {
         (Some(python), Some(binary), Some(fmu)) => {
