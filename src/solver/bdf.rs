@@ -975,20 +975,25 @@ impl<const N: usize> Bdf<N> {
         }
         if self.cfg.stability_guard && self.guard.max_safe_order(q_next, self.h * eta) < q_next {
             // A weakly damped mode of J would sit in the unstable band of that order: take
-            // instead the stable order whose own error estimate allows the largest step.
-            self.stats.order_caps += 1;
-            (q_next, eta) = self.best_stable_order(q_next, dsm);
+            // instead the stable order whose own error estimate allows the largest step, if
+            // one keeps the resolved modes accurate. If none does, the mode is left to the
+            // error test, which sees its growth and shortens the step.
+            if let Some(choice) = self.best_stable_order(q_next, dsm) {
+                self.stats.order_caps += 1;
+                (q_next, eta) = choice;
+            }
         }
         self.q_next = q_next;
         self.h_next = self.h * eta;
     }
 
     /// The order k ≤ `limit` (and ≤ q) and step ratio η with the largest step among those the
-    /// stability guard accepts. Order q uses its error estimate `dsm`; a lower order k uses
-    /// the local error of BDF_k at constant step, k!·z_{k+1} (error constant 1/(k+1) times
-    /// h^{k+1}y^{(k+1)}). BDF1 and BDF2 are always stable, so there is always a choice.
-    fn best_stable_order(&self, limit: usize, dsm: f64) -> (usize, f64) {
-        let mut best = (1, 0.0);
+    /// stability guard accepts ([`StabilityGuard::acceptable`] with a drift of at most rtol per
+    /// period). Order q uses its error estimate `dsm`; a lower order k uses the local error of
+    /// BDF_k at constant step, k!·z_{k+1} (error constant 1/(k+1) times h^{k+1}y^{(k+1)}).
+    /// `None` if no order is acceptable.
+    fn best_stable_order(&self, limit: usize, dsm: f64) -> Option<(usize, f64)> {
+        let mut best: Option<(usize, f64)> = None;
         let mut factorial = 1.0;
         for k in 1..=limit.min(self.q) {
             factorial *= k as f64;
@@ -996,8 +1001,9 @@ impl<const N: usize> Bdf<N> {
             let raw = step_ratio(BIAS_SAME, err, k + 1);
             // Grow only past the usual threshold; shrink at once if the estimate asks for it.
             let eta = if raw < ETA_THRESHOLD { raw.min(1.0) } else { self.limit_growth(raw) };
-            if eta > best.1 && self.guard.max_safe_order(k, self.h * eta) == k {
-                best = (k, eta);
+            let larger = best.map_or(true, |(_, b)| eta > b);
+            if larger && self.guard.acceptable(k, self.h * eta, self.cfg.rtol) {
+                best = Some((k, eta));
             }
         }
         best

@@ -34,6 +34,27 @@ pub fn unstable_band(q: usize) -> Option<(f64, f64)> {
     }
 }
 
+/// The amplitude change per period of an undamped mode resolved by BDF_q at h·ω = y, below
+/// the order's unstable band: |ζ(iy)|^(2π/y) − 1 in magnitude, from the leading term of the
+/// largest root's modulus, |ζ(iy)| = 1 + c_q·y^(p+1) + …, times 2π/y steps per period:
+/// BDF1 −y²/2, BDF2 −y⁴/4, BDF3 +y⁴/4, BDF4 +y⁶/3, BDF5 −y⁶/6. BDF3 and BDF4 let the
+/// amplitude grow, BDF1, 2 and 5 damp it; either way the error accumulates over the periods
+/// a run lasts. (`tests::drift_matches_root_moduli` checks it against the roots: for
+/// y ≤ 0.25 it is between 0.8 and 1.5 times the true drift, mostly above it.)
+pub fn drift_per_period(q: usize, y: f64) -> f64 {
+    use std::f64::consts::PI;
+    match q {
+        1 => PI * y,
+        2 | 3 => 0.5 * PI * y.powi(3),
+        4 => 2.0 * PI / 3.0 * y.powi(5),
+        _ => PI / 3.0 * y.powi(5),
+    }
+}
+
+/// For BDF1 and BDF2: a mode with h·|λ| at or above this is not resolved (fewer than 2π
+/// steps per period), and the guard may let those orders damp it.
+const UNRESOLVED_FROM: f64 = 1.0;
+
 /// Largest number of modes stored (one per complex-conjugate pair).
 const MAX_MODES: usize = 8;
 /// Modes whose eigenvalue lies more than this angle (degrees) from the negative real axis
@@ -138,6 +159,27 @@ impl StabilityGuard {
         k
     }
 
+    /// Whether the guard may move the step to order `q` and size `h`: no stored mode in the
+    /// unstable band, and every resolved stored mode (below the band) drifts by at most
+    /// `max_drift` per period. A lower order that damps a resolved mode by more than the
+    /// tolerance, or lets it grow, over hundreds of periods is no cure for an unstable one:
+    /// then the guard leaves the choice to the error test (see `Bdf::choose_next`).
+    pub(crate) fn acceptable(&self, q: usize, h: f64, max_drift: f64) -> bool {
+        if !self.safe(q, h) {
+            return false;
+        }
+        // Below `lo` a mode counts as resolved: BDF3–5's lower band edge, or for BDF1 and
+        // BDF2, which have no band, fewer than 2π steps per period (h·|λ| = 1); damping a
+        // mode that is not resolved is what a stiff integrator should do with it.
+        let lo = unstable_band(q).map_or(UNRESOLVED_FROM, |(lo, _)| lo);
+        self.modes[..self.count].iter().all(|m| {
+            let y = h.abs() * m.modulus;
+            m.angle_deg <= A_STABILITY_ANGLE_DEG[3]
+                || y >= lo
+                || drift_per_period(q, y) <= max_drift
+        })
+    }
+
     fn safe(&self, q: usize, h: f64) -> bool {
         let Some((lo, hi)) = unstable_band(q) else {
             return true;
@@ -234,6 +276,19 @@ mod tests {
             assert!(max_root_modulus(q, (0.0, lo - 0.02)) < 1.0 + 1e-3, "q={q} below");
             assert!(max_root_modulus(q, (0.0, hi)) <= 1.0 + 1e-9, "q={q} above");
             assert!(max_root_modulus(q, (0.0, hi - 0.02)) > 1.0, "q={q} tight");
+        }
+    }
+
+    #[test]
+    fn drift_matches_root_moduli() {
+        for q in 1..=5 {
+            for y in [0.01, 0.03, 0.1, 0.25] {
+                let truth = (max_root_modulus(q, (0.0, y)).powf(2.0 * std::f64::consts::PI / y)
+                    - 1.0)
+                    .abs();
+                let ratio = drift_per_period(q, y) / truth;
+                assert!((0.8..=1.5).contains(&ratio), "q={q} y={y}: {ratio}");
+            }
         }
     }
 
