@@ -260,6 +260,33 @@ impl BeamBody {
         t1 + t2 + p1 + p2
     }
 
+    /// The buckling value of g < 0 (gravity reversed, compressing the beam along its axis)
+    /// for the other parameters of `params`: where the lowest squared frequency about the
+    /// equilibrium at φ = 0 ([`modes`](Self::modes)) crosses zero, by bisection to the
+    /// resolution of f64. Below it in magnitude the straight beam is stable.
+    pub fn buckling_g(params: Params) -> f64 {
+        let omega2 = |g: f64| {
+            let p = Params { g, ..params };
+            BeamBody::new(p).map_or(f64::NAN, |m| m.modes(0.0).omega2[0])
+        };
+        let (mut lo, mut hi) = (0.0, -1.0);
+        while omega2(hi) > 0.0 && hi > -1e12 {
+            lo = hi;
+            hi *= 2.0;
+        }
+        loop {
+            let mid = 0.5 * (lo + hi);
+            if mid == lo || mid == hi {
+                return mid;
+            }
+            if omega2(mid) > 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+    }
+
     /// Natural frequencies of (15) linearised about its static equilibrium at a fixed φ.
     /// The equilibrium solves K q = M2 g J_C(q)ᵀ e_x by Newton's method.
     pub fn modes(&self, phi_fixed: f64) -> Modes {
