@@ -25,35 +25,36 @@
 
 use std::cell::{Cell, RefCell};
 
-use beam_body::model::{DaeSystem, Formulation, PhiPiece, TwoDofSystem};
+use beam_body::model::PhiPiece;
 use beam_body::solver::OdeSystem;
 use diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Op, Vector,
 };
-use nalgebra::{SVector, Vector4, Vector6};
+use nalgebra::SVector;
 
-use super::problem::{Counters, Outcome, Problem};
+use super::problem::{with_system, Counters, Outcome, Problem, WithSystem};
 
 /// Solves `problem` with diffsol's BDF at `rtol`, atol = 1e-3·rtol for every state.
 pub fn run(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
-    let scene = &problem.scene;
-    let model = scene.validate().map_err(|err| err.to_string())?;
-    let init = scene.initial;
-    match scene.formulation {
-        Formulation::Reduced | Formulation::Linear => {
-            let linear = scene.formulation == Formulation::Linear;
-            let y0 = Vector4::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            solve(problem, rtol, |phi| TwoDofSystem { model: &model, phi, linear }, y0)
-        }
-        Formulation::Dae | Formulation::DaeStabilized => {
-            let stabilized = scene.formulation == Formulation::DaeStabilized;
-            let system = |phi| DaeSystem { model: &model, phi, stabilized };
-            // u2 and u̇2 consistent with the constraint, as `Run::new` starts them.
-            let free = Vector6::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
-            let y0 = system(scene.law.piece_from(0.0)).consistent(&free);
-            solve(problem, rtol, system, y0)
-        }
+    let model = problem.scene.validate().map_err(|err| err.to_string())?;
+    with_system(&problem.scene, &model, Diffsol { problem, rtol })
+}
+
+/// [`solve`] with its arguments, for [`with_system`].
+struct Diffsol<'a> {
+    problem: &'a Problem,
+    rtol: f64,
+}
+
+impl WithSystem for Diffsol<'_> {
+    type Output = Result<Outcome, String>;
+    fn apply<const N: usize, S, F>(self, system: F, y0: SVector<f64, N>) -> Self::Output
+    where
+        S: OdeSystem<N> + Copy,
+        F: Fn(PhiPiece) -> S,
+    {
+        solve(self.problem, self.rtol, system, y0)
     }
 }
 

@@ -631,7 +631,7 @@ fn write_solution(path: &Path, problem: &Problem, outcome: &Outcome) -> Result {
         }
         text.push('\n');
     }
-    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+    write_text(path, &text)
 }
 
 /// Fisher–Yates with SplitMix64 seeded by the round: a different, reproducible order in every
@@ -711,7 +711,7 @@ fn write_costs(path: &Path, scenes: &[&str]) -> Result {
         writeln!(text, "{scene},{rhs:.2},{lu:.2},{solve:.2}").expect("String");
         eprintln!("  costs {}: rhs {rhs:.1} ns, LU {lu:.1} ns, solve {solve:.1} ns", problem.name);
     }
-    fs::write(path, text).map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
+    write_text(path, &text)
 }
 
 /// (rhs, LU, solve) in ns.

@@ -3,8 +3,10 @@
 
 use std::fs;
 
-use beam_body::model::Formulation;
+use beam_body::model::{BeamBody, DaeSystem, Formulation, PhiPiece, TwoDofSystem};
 use beam_body::sim::{scene_entries, Scene};
+use beam_body::solver::OdeSystem;
+use nalgebra::{SVector, Vector4, Vector6};
 
 use crate::project_root;
 
@@ -18,6 +20,37 @@ pub const SCENES: [(&str, &str, Formulation); 4] = [
     ("paper-dae-stabilized", "paper.toml", Formulation::DaeStabilized),
     ("stiff", "stiff.toml", Formulation::Reduced),
 ];
+
+/// What an outside integrator does with a scene's first-order system (see [`with_system`]).
+pub trait WithSystem {
+    type Output;
+    /// `system` builds the formulation's system for a piece of φ; `y0` is the initial state.
+    fn apply<const N: usize, S, F>(self, system: F, y0: SVector<f64, N>) -> Self::Output
+    where
+        S: OdeSystem<N> + Copy,
+        F: Fn(PhiPiece) -> S;
+}
+
+/// Calls `w` with the scene's formulation as a system of 4 (reduced, linear) or 6 (dae,
+/// dae-stabilized) states and its initial state, the DAE's u2 and u̇2 made consistent with
+/// the constraint as `Run::new` starts them.
+pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::Output {
+    let init = scene.initial;
+    match scene.formulation {
+        Formulation::Reduced | Formulation::Linear => {
+            let linear = scene.formulation == Formulation::Linear;
+            let y0 = Vector4::new(init.v1, init.theta1, init.dv1, init.dtheta1);
+            w.apply(|phi| TwoDofSystem { model, phi, linear }, y0)
+        }
+        Formulation::Dae | Formulation::DaeStabilized => {
+            let stabilized = scene.formulation == Formulation::DaeStabilized;
+            let system = |phi| DaeSystem { model, phi, stabilized };
+            let free = Vector6::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
+            let y0 = system(scene.law.piece_from(0.0)).consistent(&free);
+            w.apply(system, y0)
+        }
+    }
+}
 
 /// One benchmark problem.
 pub struct Problem {

@@ -34,9 +34,9 @@ pub fn extracted_dir() -> PathBuf {
     target_dir().join("sweep").join("fmu").join(MODEL_IDENTIFIER)
 }
 
-/// Runs the scene through the FMU: the recorded times and states (v1, ϑ1, v̇1, ϑ̇1), or the
-/// FMU's message when a step is discarded (with the states up to there).
-pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<(f64, [f64; 4])>, String> {
+/// Runs the scene through the FMU: the states (v1, ϑ1, v̇1, ϑ̇1) at t = 0 and every
+/// `stride`-th communication point, or the FMU's message when a step is discarded.
+pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<[f64; 4]>, String> {
     let fmu = Fmu2::load(&extracted_dir()).map_err(|e| format!("loading the FMU: {e}"))?;
     let source = match how.phi {
         FmuPhi::Law => "law",
@@ -51,13 +51,13 @@ pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<(f64, [f64; 4])>, String> 
     instance.exit_initialization_mode().map_err(text)?;
     let states = [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1].map(|v| v.vr());
     let mut out = Vec::new();
-    let mut record = |instance: &mut crate::host::Instance, t: f64| -> Result<(), String> {
+    let mut record = |instance: &mut crate::host::Instance| -> Result<(), String> {
         let mut y = [0.0; 4];
         instance.get_real(&states, &mut y).map_err(|e| e.to_string())?;
-        out.push((t, y));
+        out.push(y);
         Ok(())
     };
-    record(&mut instance, 0.0)?;
+    record(&mut instance)?;
     for k in 0..n {
         let tc = k as f64 * how.h;
         if let FmuPhi::Step { t_jump, jump } = how.phi {
@@ -73,7 +73,7 @@ pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<(f64, [f64; 4])>, String> 
             return Err(message);
         }
         if (k + 1) % how.stride as u64 == 0 {
-            record(&mut instance, (k + 1) as f64 * how.h)?;
+            record(&mut instance)?;
         }
     }
     instance.terminate().map_err(text)?;
