@@ -1,5 +1,6 @@
 //! Integration tests of the BDF integrator on problems with known solutions.
 
+use beam_body::solver::problems::SlowAndFast;
 use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem, StateVisitor};
 use nalgebra::{Matrix2, SMatrix, SVector, Vector1, Vector2, Vector3};
 
@@ -163,60 +164,11 @@ fn robertson_regression() {
 /// (steps, rejected, f-evals, Jacobians, LU factorisations) of `robertson_regression`.
 const ROBERTSON_WORK: (u64, u64, u64, u64, u64) = (129, 3, 165, 3, 26);
 
-/// A slow motion and an undamped fast oscillator whose amplitude lies below the absolute
-/// tolerance, so the error controller does not resolve it. The slow motion is either a
-/// second undamped oscillator (ω = 1), or a first-order lag driven at ω = 1,
-/// y0' = −(y0 − sin t)/2, whose Jacobian eigenvalue −1/2 is real.
-struct SlowAndFast {
-    fast: f64,
-    slow_oscillates: bool,
-}
-
-impl OdeSystem<4> for SlowAndFast {
-    fn rhs(&self, t: f64, y: &SVector<f64, 4>) -> SVector<f64, 4> {
-        let (slow0, slow2) =
-            if self.slow_oscillates { (y[2], -y[0]) } else { (-0.5 * (y[0] - t.sin()), 0.0) };
-        SVector::<f64, 4>::new(slow0, y[3], slow2, -self.fast * self.fast * y[1])
-    }
-    fn jacobian(&self, _t: f64, _y: &SVector<f64, 4>) -> Option<SMatrix<f64, 4, 4>> {
-        let mut j = SMatrix::<f64, 4, 4>::zeros();
-        if self.slow_oscillates {
-            j[(0, 2)] = 1.0;
-            j[(2, 0)] = -1.0;
-        } else {
-            j[(0, 0)] = -0.5;
-        }
-        j[(1, 3)] = 1.0;
-        j[(3, 1)] = -self.fast * self.fast;
-        Some(j)
-    }
-}
-
-/// Runs the system to t = 200; returns (largest fast-mode amplitude seen, error of the slow
-/// component y0 at the end against its exact solution, stats).
+/// Runs [`SlowAndFast`] at ω = 30, rtol 1e-5, to t = 200; returns (largest fast-mode
+/// amplitude seen, error of the slow component at the end, stats).
 fn slow_and_fast(guard: bool, slow_oscillates: bool) -> (f64, f64, beam_body::solver::Stats) {
-    let fast = 30.0;
-    let mut cfg = BdfConfig::new(1e-5);
-    cfg.atol = SVector::repeat(1e-6);
-    cfg.stability_guard = guard;
-    let y0 = SVector::<f64, 4>::new(if slow_oscillates { 1.0 } else { 0.0 }, 1e-9, 0.0, 0.0);
-    let mut s = Bdf::new(cfg, 0.0, y0).unwrap();
-    let sys = SlowAndFast { fast, slow_oscillates };
-    let mut amp: f64 = 0.0;
-    let t_end = 200.0;
-    while s.t() < t_end {
-        s.step(&sys, t_end).unwrap();
-        s.check_state().unwrap();
-        let y = s.y();
-        amp = amp.max((y[1] * y[1] + (y[3] / fast).powi(2)).sqrt());
-    }
-    // y0 = cos t, or the lag's solution from rest: (sin t − 2 cos t + 2 e^(−t/2))/5.
-    let exact = if slow_oscillates {
-        t_end.cos()
-    } else {
-        (t_end.sin() - 2.0 * t_end.cos() + 2.0 * (-0.5 * t_end).exp()) / 5.0
-    };
-    (amp, (s.y()[0] - exact).abs(), *s.stats())
+    let r = SlowAndFast { fast: 30.0, slow_oscillates }.run(1e-5, guard, 200.0).unwrap();
+    (r.fast_amplitude, r.slow_error, r.stats)
 }
 
 /// The BDF3–5 trap (numerics-notes.md) and the guard against it. Over a slow motion that is

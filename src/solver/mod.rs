@@ -11,6 +11,7 @@ mod eigen;
 mod error;
 mod guard;
 mod lu;
+pub mod problems;
 mod snapshot;
 mod stats;
 mod system;
