@@ -132,6 +132,22 @@ fn dae_drift_is_reported_and_bounded() {
     assert!(s6 <= 1e-16, "stabilized drift {s6}");
 }
 
+/// Where the drift grows past l/10 (rtol 1e-2 on the paper's scene: 0.73 m by t = 10.2 s
+/// unchecked), the unprojected DAE stops with a message naming the drift and its bound; the
+/// stabilised variant runs the same scene to the end.
+#[test]
+fn dae_drift_beyond_a_tenth_of_the_length_stops_the_run() {
+    let scene = |form: &str| with(paper(), &[("formulation", form), ("rtol", "1e-2")]);
+    let mut last = None;
+    let err = simulate(&scene("dae"), |o| last = Some(*o)).unwrap_err().to_string();
+    assert!(err.contains("drift = ") && err.contains("<= l/10"), "{err}");
+    assert!(err.contains("outside the model's range of validity"), "{err}");
+    let last = last.expect("some outputs before the stop");
+    assert!(last.drift.abs() <= 0.25 && last.t < 10.2, "t = {}, drift {}", last.t, last.drift);
+    let (rows, _) = run(&scene("dae-stabilized"));
+    assert_eq!(rows.len(), 1201);
+}
+
 /// The paper's constant-step BDF reproduces the adaptive solution.
 #[test]
 fn fixed_step_mode_matches_adaptive() {
