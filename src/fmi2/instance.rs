@@ -538,7 +538,7 @@ impl Instance {
             if !(tol.is_finite() && (1e-14..=1.0).contains(&tol)) {
                 return self.fail(
                     Status::Error,
-                    format!("{F}: tolerance = {tol} is out of range: must be in [1e-14, 1]"),
+                    format!("{F}: tolerance = {tol:?} is out of range: must be in [1e-14, 1]"),
                 );
             }
         }

@@ -231,7 +231,7 @@ fn check_head(core: &Core) -> Result<(), String> {
     if let Some(tol) = s.tolerance {
         if !(tol.is_finite() && (1e-14..=1.0).contains(&tol)) {
             return Err(format!(
-                "field `tolerance` = {tol} is out of range: must be in [1e-14, 1]"
+                "field `tolerance` = {tol:?} is out of range: must be in [1e-14, 1]"
             ));
         }
     }

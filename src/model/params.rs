@@ -39,7 +39,7 @@ impl fmt::Display for ParamError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "parameter `{}` = {} is out of range: must be {}",
+            "parameter `{}` = {:?} is out of range: must be {}",
             self.name, self.value, self.allowed
         )
     }

@@ -38,7 +38,7 @@ impl fmt::Display for SolverError {
         use SolverError::*;
         match *self {
             InvalidConfig { field, value, allowed } => {
-                write!(f, "solver setting `{field}` = {value} is out of range: must be {allowed}")
+                write!(f, "solver setting `{field}` = {value:?} is out of range: must be {allowed}")
             }
             NonFiniteState { t } => write!(f, "non-finite state (NaN or ±inf) at t = {t}"),
             NonFiniteRhs { t } => write!(
