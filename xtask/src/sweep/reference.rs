@@ -39,9 +39,22 @@ const E: [f64; 7] = [
 /// Why the reference gave up.
 #[derive(Debug, Clone, PartialEq)]
 pub enum RefError {
-    TooManySteps { t: f64 },
-    StepTooSmall { t: f64 },
-    NonFinite { t: f64 },
+    TooManySteps {
+        t: f64,
+    },
+    StepTooSmall {
+        t: f64,
+    },
+    NonFinite {
+        t: f64,
+    },
+    /// The state left the system's range of validity ([`OdeSystem::check_range`]) after the
+    /// step that ended at `t`: the same check as the BDF's.
+    OutOfRange {
+        t: f64,
+        name: &'static str,
+        value: f64,
+    },
 }
 
 impl std::fmt::Display for RefError {
@@ -50,6 +63,9 @@ impl std::fmt::Display for RefError {
             RefError::TooManySteps { t } => write!(f, "step limit reached at t = {t}"),
             RefError::StepTooSmall { t } => write!(f, "step size underflow at t = {t}"),
             RefError::NonFinite { t } => write!(f, "non-finite state at t = {t}"),
+            RefError::OutOfRange { t, name, value } => {
+                write!(f, "{name} = {value:e} at t = {t} is out of range")
+            }
         }
     }
 }
@@ -129,6 +145,9 @@ impl<const N: usize> Dopri5<N> {
                 self.y = y_new;
                 f0 = k[6];
                 self.steps += 1;
+                if let Err(v) = sys.check_range(self.t, &self.y) {
+                    return Err(RefError::OutOfRange { t: self.t, name: v.name, value: v.value });
+                }
             }
             // h_new = h·min(5, max(0.2, 0.9·e^(−1/5))) (Hairer, Nørsett & Wanner I, II.4).
             let factor = if e == 0.0 { 5.0 } else { (0.9 * e.powf(-0.2)).clamp(0.2, 5.0) };
@@ -181,6 +200,39 @@ mod tests {
         let b = |p: i32| (0..6).map(|j| A[6][j] * C[j].powi(p)).sum::<f64>();
         for p in 0..5 {
             assert!((b(p) - 1.0 / (p + 1) as f64).abs() < 1e-14, "Σ b c^{p}");
+        }
+    }
+
+    /// y' = 1 with the range y ≤ 1: the run stops after the step that crosses it, with the
+    /// check's variable and value, as the BDF does.
+    #[test]
+    fn stops_where_the_system_leaves_its_range() {
+        struct Ramp;
+        impl OdeSystem<1> for Ramp {
+            fn rhs(&self, _t: f64, _y: &SVector<f64, 1>) -> SVector<f64, 1> {
+                SVector::<f64, 1>::new(1.0)
+            }
+            fn check_range(
+                &self,
+                _t: f64,
+                y: &SVector<f64, 1>,
+            ) -> Result<(), beam_body::solver::RangeViolation> {
+                if y[0] > 1.0 {
+                    return Err(beam_body::solver::RangeViolation {
+                        name: "y",
+                        value: y[0],
+                        allowed: "y <= 1",
+                    });
+                }
+                Ok(())
+            }
+        }
+        let mut r = Dopri5::new(0.0, SVector::<f64, 1>::new(0.0), 1e-8, 1e-8, 1000);
+        match r.advance(&Ramp, 5.0) {
+            Err(RefError::OutOfRange { t, name: "y", value }) => {
+                assert!(t > 1.0 && t < 5.0 && (value - t).abs() < 1e-12, "t {t}, y {value}");
+            }
+            other => panic!("expected a range stop, got {other:?}"),
         }
     }
 
