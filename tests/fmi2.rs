@@ -8,7 +8,9 @@
 mod common;
 
 use beam_body::fmi2::ffi::*;
-use beam_body::fmi2::variables::{guid, Type, Var, DEFAULT_EXPERIMENT, LOG_CATEGORIES, VARIABLES};
+use beam_body::fmi2::variables::{
+    guid, BaseType, Type, Var, DEFAULT_EXPERIMENT, LOG_CATEGORIES, VARIABLES,
+};
 use common::*;
 use std::f64::consts::PI;
 use std::ffi::{c_char, CStr, CString};
@@ -260,6 +262,57 @@ fn instantiate_with_logging_on_traces_calls() {
     );
 }
 
+/// visible and loggingOn take any fmi2Boolean (non-zero is true; visible is ignored), with
+/// or without a resource location. loggingOn decides whether calls are traced from the
+/// start: not at all when false, fmi2Instantiate itself and the calls after when true.
+#[test]
+fn instantiate_accepts_every_visible_and_logging_on_value() {
+    let _g = shared();
+    let g = guid_c();
+    let resources = c"file:///tmp/beam_body/resources";
+    for visible in [fmi2False, fmi2True, 2] {
+        for logging_on in [fmi2False, fmi2True, -1] {
+            for location in [null(), resources.as_ptr()] {
+                let what = format!("visible {visible}, loggingOn {logging_on}, {location:?}");
+                let log = Box::<Collector>::default();
+                let callbacks = callbacks(log.env());
+                let c = unsafe {
+                    fmi2Instantiate(
+                        c"variant".as_ptr(),
+                        CO_SIMULATION,
+                        g.as_ptr(),
+                        location,
+                        &*callbacks,
+                        visible,
+                        logging_on,
+                    )
+                };
+                assert!(!c.is_null(), "{what}: {:#?}", log.records());
+                let h = Host { c, name: "variant".into(), log, callbacks };
+                let traced = logging_on != fmi2False;
+                let records = h.take();
+                if traced {
+                    assert_eq!(records.len(), 1, "{what}: {records:#?}");
+                    let r = &records[0];
+                    assert_eq!((r.status, r.category.as_str()), (OK, "logCalls"), "{what}");
+                    assert_eq!(r.message, "fmi2Instantiate: instance `variant`", "{what}");
+                } else {
+                    assert!(records.is_empty(), "{what}: {records:#?}");
+                }
+                let st = h.setup(Some(1e-6), 0.0, None);
+                let records = h.take();
+                assert_eq!(st, OK, "{what}: {records:#?}");
+                let setup_traced =
+                    records.iter().any(|r| r.message.starts_with("fmi2SetupExperiment: "));
+                assert_eq!(setup_traced, traced, "{what}: {records:#?}");
+                h.expect_ok(h.enter());
+                h.expect_ok(h.exit());
+                h.expect_ok(h.step(0.0, 0.01));
+            }
+        }
+    }
+}
+
 // ===== 3. illegal call sequences ================================================================
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -403,7 +456,7 @@ fn calls() -> Vec<Call> {
         ("fmi2Terminate", &[StepComplete, StepFailed], |h, _| h.terminate()),
         ("fmi2DoStep", &[StepComplete], |h, t| h.step(t, 0.01)),
         ("fmi2Reset", &ALL_STATES, |h, _| h.reset()),
-        ("fmi2SetDebugLogging", &ALL_STATES, |h, _| h.debug_logging(false, &[])),
+        ("fmi2SetDebugLogging", &ALL_STATES, |h, _| h.debug_logging(true, &[c"logCalls"])),
         ("fmi2GetReal", GET, |h, _| h.get_reals(&[vr(Var::L)]).0),
         ("fmi2GetInteger", GET, |h, _| h.get_integers(&[vr(Var::Formulation)]).0),
         ("fmi2GetBoolean", GET, |h, _| h.get_booleans(&[vr(Var::StabilityGuard)]).0),
@@ -449,36 +502,252 @@ fn calls() -> Vec<Call> {
             unsafe { fmi2GetStringStatus(h.c, PENDING_STATUS, &mut s) }
         }),
         ("fmi2GetFMUstate", &ALL_STATES, fmu_state_round_trip),
+        // The other FMU-state functions one by one, each with a state from another instance.
+        ("fmi2SetFMUstate", &ALL_STATES, |h, _| {
+            let (d, mut s) = donor_state();
+            let status = h.set_state(s);
+            d.expect_ok(d.free_state(&mut s));
+            status
+        }),
+        ("fmi2FreeFMUstate", &ALL_STATES, |h, _| {
+            let (d, mut s) = donor_state();
+            let status = h.free_state(&mut s);
+            if !s.is_null() {
+                d.expect_ok(d.free_state(&mut s));
+            }
+            status
+        }),
+        ("fmi2SerializedFMUstateSize", &ALL_STATES, |h, _| {
+            let (d, mut s) = donor_state();
+            let mut size = 0;
+            let status = unsafe { fmi2SerializedFMUstateSize(h.c, s, &mut size) };
+            assert_eq!(size != 0, status == OK, "size {size}");
+            d.expect_ok(d.free_state(&mut s));
+            status
+        }),
+        ("fmi2SerializeFMUstate", &ALL_STATES, |h, _| {
+            let (d, mut s) = donor_state();
+            let want = d.serialize(s);
+            let mut bytes = vec![0u8; want.len()];
+            let p = bytes.as_mut_ptr() as *mut fmi2Byte;
+            let status = unsafe { fmi2SerializeFMUstate(h.c, s, p, bytes.len()) };
+            assert_eq!(bytes == want, status == OK, "bytes written iff fmi2OK");
+            d.expect_ok(d.free_state(&mut s));
+            status
+        }),
+        ("fmi2DeSerializeFMUstate", &ALL_STATES, |h, _| {
+            let (d, mut s) = donor_state();
+            let bytes = d.serialize(s);
+            d.expect_ok(d.free_state(&mut s));
+            let mut p: fmi2FMUstate = null_mut();
+            let status = h.deserialize(&bytes, &mut p);
+            assert_eq!(!p.is_null(), status == OK, "a state iff fmi2OK");
+            if !p.is_null() {
+                d.expect_ok(d.free_state(&mut p));
+            }
+            status
+        }),
     ]
 }
 
-/// For every reachable state and every function: a call that the state machine forbids
-/// returns fmi2Error, logs "illegal call sequence" with the function and state, and leaves
-/// the instance usable in its state; a call that it allows is not called illegal.
+/// A live FMU state of a separate instance in `instantiated`, and that instance.
+fn donor_state() -> (Host, fmi2FMUstate) {
+    let d = Host::new("donor");
+    let mut s: fmi2FMUstate = null_mut();
+    d.expect_ok(d.get_state(&mut s));
+    (d, s)
+}
+
+/// The documented outcome of a call in a state that allows it, with the arguments of
+/// [`calls`]: `Ok` for fmi2OK, `Err(reason)` for fmi2Error with a message naming the call
+/// and `reason`.
+fn allowed_outcome(name: &str, st: St) -> Result<(), &'static str> {
+    match name {
+        // Declared unsupported in modelDescription.xml: they log why and return fmi2Error.
+        "fmi2GetRealOutputDerivatives"
+        | "fmi2GetDirectionalDerivative"
+        | "fmi2GetStatus"
+        | "fmi2GetIntegerStatus"
+        | "fmi2GetStringStatus" => Err("not provided"),
+        // The only integer and boolean variables are fixed parameters.
+        "fmi2SetInteger" | "fmi2SetBoolean" if st == StepComplete => Err("fixed parameter"),
+        _ => Ok(()),
+    }
+}
+
+/// For every reachable state and every function that takes an instance (30, the FMU-state
+/// functions one by one; fmi2FreeInstance has its own test), with debug logging off and
+/// with logCalls on:
+/// - a call that the state machine forbids returns fmi2Error, logs "illegal call sequence"
+///   with the function and state, and leaves the instance usable in its state;
+/// - a call that it allows returns its documented status ([`allowed_outcome`]): fmi2OK
+///   with nothing logged when logging is off and a logCalls trace naming the call when it
+///   is on, or fmi2Error with a message naming the call and the reason.
 #[test]
 fn illegal_call_sequences_are_refused_in_every_state() {
     let _g = shared();
-    let mut illegal = 0;
-    for st in ALL_STATES {
-        for (name, allowed, call) in calls() {
-            let (h, t) = reach(st);
-            let status = call(&h, t);
-            if allowed.contains(&st) {
-                let records = h.take();
-                assert!(
-                    !records.iter().any(|r| r.message.contains("illegal call sequence")),
-                    "{name} is allowed in {st:?}: {records:#?}"
-                );
-                assert_ne!(status, FATAL, "{name} in {st:?}: {records:#?}");
-            } else {
-                let r = h.expect_error(status, &[name, "illegal call sequence", st.fmu_name()]);
-                assert_eq!(r.name, h.name);
-                probe(&h, st, t);
-                illegal += 1;
+    let (mut illegal, mut pairs) = (0, 0);
+    for logging in [false, true] {
+        for st in ALL_STATES {
+            for (name, allowed, call) in calls() {
+                let (h, t) = reach(st);
+                if logging {
+                    h.expect_ok(h.debug_logging(true, &[c"logCalls"]));
+                }
+                let status = call(&h, t);
+                if !allowed.contains(&st) {
+                    let r = h.expect_error(status, &[name, "illegal call sequence", st.fmu_name()]);
+                    assert_eq!(r.name, h.name);
+                    probe(&h, st, t);
+                    illegal += 1;
+                } else if let Err(reason) = allowed_outcome(name, st) {
+                    let r = h.expect_error(status, &[&format!("{name}: "), reason]);
+                    assert!(!r.message.contains("illegal call sequence"), "{r:?}");
+                } else {
+                    let records = h.take();
+                    assert_eq!(status, OK, "{name} in {st:?}: {records:#?}");
+                    // The call of fmi2SetDebugLogging switches logCalls on itself.
+                    if logging || name == "fmi2SetDebugLogging" {
+                        assert!(!records.is_empty(), "{name} in {st:?} is not traced");
+                        assert!(
+                            records.iter().all(|r| r.status == OK && r.category == "logCalls"),
+                            "{name} in {st:?}: {records:#?}"
+                        );
+                        let head = format!("{name}: ");
+                        assert!(
+                            records.iter().any(|r| r.message.starts_with(&head)),
+                            "no trace of {name} in {st:?}: {records:#?}"
+                        );
+                    } else {
+                        assert!(records.is_empty(), "{name} in {st:?}, logging off: {records:#?}");
+                    }
+                }
+                pairs += 1;
             }
         }
     }
-    assert!(illegal >= 60, "only {illegal} illegal calls checked");
+    // 6 states × 30 functions, twice; the state machine forbids 67 of the 180 pairs.
+    assert_eq!((pairs, illegal), (2 * 6 * 30, 2 * 67));
+}
+
+/// The `start` state: no instance. Each of the 30 calls of [`calls`] with a NULL instance
+/// returns fmi2Error and logs nothing (there is no logger to call: the callbacks come with
+/// fmi2Instantiate), not even to another live instance's logger. fmi2FreeInstance(NULL) is
+/// a no-op; the three functions without an instance work.
+#[test]
+fn every_call_without_an_instance_is_refused_silently() {
+    let _g = shared();
+    let bystander = Host::law("bystander");
+    let log = Box::<Collector>::default();
+    let callbacks = callbacks(log.env());
+    let nobody = Host { c: null_mut(), name: "nobody".into(), log, callbacks };
+    let calls = calls();
+    assert_eq!(calls.len(), 30);
+    for (name, _, call) in calls {
+        let status = call(&nobody, 0.0);
+        assert_eq!(status, ERROR, "{name}(NULL)");
+        assert!(nobody.take().is_empty(), "{name}(NULL) has no logger");
+        assert!(bystander.take().is_empty(), "{name}(NULL) logged to another instance");
+    }
+    unsafe { fmi2FreeInstance(null_mut()) };
+    let platform = unsafe { CStr::from_ptr(fmi2GetTypesPlatform()) };
+    assert_eq!(platform, c"default");
+    let version = unsafe { CStr::from_ptr(fmi2GetVersion()) };
+    assert_eq!(version, c"2.0");
+    // fmi2Instantiate is the one function for `start`.
+    let h = Host::new("first");
+    h.expect_ok(h.setup(None, 0.0, None));
+    assert!(bystander.take().is_empty());
+    bystander.steps(0.0, 0.01, 2);
+}
+
+/// fmi2GetTypesPlatform, fmi2GetVersion, fmi2Instantiate (with fmi2FreeInstance of the new
+/// instance) and fmi2FreeInstance(NULL) take no instance: whatever the state of a live one,
+/// they work and leave it alone, in its state and silent.
+#[test]
+fn functions_without_an_instance_work_whatever_the_state_of_others() {
+    let _g = shared();
+    for st in ALL_STATES {
+        let (h, t) = reach(st);
+        let platform = unsafe { CStr::from_ptr(fmi2GetTypesPlatform()) };
+        assert_eq!(platform, c"default", "{st:?}");
+        let version = unsafe { CStr::from_ptr(fmi2GetVersion()) };
+        assert_eq!(version, c"2.0", "{st:?}");
+        let other = Host::new("other");
+        other.expect_ok(other.setup(None, 0.0, None));
+        drop(other);
+        unsafe { fmi2FreeInstance(null_mut()) };
+        assert!(h.take().is_empty(), "{st:?}");
+        probe(&h, st, t);
+    }
+}
+
+/// fmi2FreeInstance in each of the six reachable states (the fatal state: ffi.rs's unit
+/// tests): traced when logCalls is on, silent otherwise; afterwards every call on the freed
+/// pointer returns fmi2Error without calling its logger, and a second free is a no-op.
+#[test]
+fn free_instance_works_in_every_state() {
+    // Calls on freed pointers: no other test may get their addresses meanwhile.
+    let _g = exclusive();
+    for logging in [false, true] {
+        for st in ALL_STATES {
+            let (mut h, _) = reach(st);
+            if logging {
+                h.expect_ok(h.debug_logging(true, &[c"logCalls"]));
+            }
+            let c = h.c;
+            unsafe { fmi2FreeInstance(c) };
+            h.c = null_mut();
+            let records = h.take();
+            if logging {
+                assert_eq!(records.len(), 1, "{st:?}: {records:#?}");
+                let r = &records[0];
+                assert_eq!((r.status, r.category.as_str()), (OK, "logCalls"));
+                assert_eq!(r.message, format!("fmi2FreeInstance: instance `{}`", h.name));
+            } else {
+                assert!(records.is_empty(), "{st:?}: {records:#?}");
+            }
+            for (name, status) in call_everything(c) {
+                assert_eq!(status, ERROR, "{name} after fmi2FreeInstance in {st:?}");
+            }
+            unsafe { fmi2FreeInstance(c) };
+            assert!(h.take().is_empty(), "a freed instance calls no logger");
+        }
+    }
+}
+
+/// Two live instances; A is freed twice (and NULL once): the second free is refused by the
+/// registry, so B is neither freed nor disturbed: it continues bit for bit like an
+/// instance that never saw the frees, and still logs under its own name.
+#[test]
+fn freeing_one_instance_twice_leaves_another_alive() {
+    let _g = exclusive();
+    let mut a = Host::law("A");
+    let b = Host::law("B");
+    let reference = Host::law("reference");
+    for h in [&a, &b, &reference] {
+        h.steps(0.0, 0.01, 3);
+    }
+    let c = a.c;
+    unsafe {
+        fmi2FreeInstance(c);
+        fmi2FreeInstance(c);
+        fmi2FreeInstance(null_mut());
+    }
+    a.c = null_mut();
+    assert!(a.log.records().is_empty());
+    assert_eq!(unsafe { fmi2DoStep(c, 0.03, 0.01, fmi2False) }, ERROR, "A is gone");
+    for k in 3..30 {
+        let t = k as f64 * 0.01;
+        b.expect_ok(b.step(t, 0.01));
+        reference.expect_ok(reference.step(t, 0.01));
+        assert_eq!(bits(&b.outputs()), bits(&reference.outputs()), "step {k}");
+    }
+    let st = b.setup(None, 0.0, None);
+    let r = b.expect_error(st, &["fmi2SetupExperiment", "illegal call sequence"]);
+    assert_eq!((r.name.as_str(), r.env), ("B", b.log.env() as usize));
+    b.expect_ok(b.terminate());
+    assert!(a.log.records().is_empty());
 }
 
 /// The sequences named in the FMI notes, one by one.
@@ -729,6 +998,26 @@ fn null_arrays_with_elements_are_errors_and_without_are_fine() {
         h.expect_ok(fmi2SetRealInputDerivatives(h.c, null(), 0, null(), null()));
         h.expect_ok(fmi2SetDebugLogging(h.c, fmi2False, 0, null()));
     }
+    // The functions that are not provided refuse NULL arrays and pointers the same way as
+    // valid ones, without reading or writing them.
+    unsafe {
+        let st = fmi2GetDirectionalDerivative(h.c, null(), 1, null(), 1, null(), null_mut());
+        h.expect_error(st, &["fmi2GetDirectionalDerivative", "not provided"]);
+        let st = fmi2GetRealOutputDerivatives(h.c, null(), 1, null(), null_mut());
+        h.expect_error(st, &["fmi2GetRealOutputDerivatives", "not provided"]);
+        let st = fmi2GetStatus(h.c, DO_STEP_STATUS, null_mut());
+        h.expect_error(st, &["fmi2GetStatus", "not provided"]);
+        let st = fmi2GetIntegerStatus(h.c, DO_STEP_STATUS, null_mut());
+        h.expect_error(st, &["fmi2GetIntegerStatus", "not provided"]);
+        let st = fmi2GetStringStatus(h.c, PENDING_STATUS, null_mut());
+        h.expect_error(st, &["fmi2GetStringStatus", "not provided"]);
+    }
+    // A state serialized into no buffer at all (size 0, NULL): too small, nothing written.
+    let mut st: fmi2FMUstate = null_mut();
+    h.expect_ok(h.get_state(&mut st));
+    let s = unsafe { fmi2SerializeFMUstate(h.c, st, null_mut(), 0) };
+    h.expect_error(s, &["fmi2SerializeFMUstate", "too small"]);
+    h.expect_ok(h.free_state(&mut st));
     // The instance is still fine.
     h.steps(0.0, 0.01, 2);
 }
@@ -810,6 +1099,72 @@ fn bad_value_references_are_errors_naming_the_variable() {
     h.expect_error(s, &["`EI`"]);
     assert_eq!(h.real(Var::Phi), 0.25);
     h.steps(0.0, 0.01, 2);
+}
+
+/// Every variable through each of the 8 get and set functions of another base type (and
+/// both string functions: the model has no strings): fmi2Error naming the function, the
+/// variable and its type; no value changes. Unknown references for the string functions too.
+#[test]
+fn every_get_and_set_of_the_wrong_type_is_refused_naming_the_variable() {
+    let _g = shared();
+    let h = Host::new("types");
+    h.expect_ok(h.setup(None, 0.0, None));
+    h.expect_ok(h.enter()); // initialization mode: every get and set is allowed
+    let all = |h: &Host| {
+        let of = |base: BaseType| -> Vec<fmi2ValueReference> {
+            VARIABLES.iter().filter(|v| v.ty.base() == base).map(|v| v.vr()).collect()
+        };
+        let (s1, reals) = h.get_reals(&of(BaseType::Real));
+        let (s2, ints) = h.get_integers(&of(BaseType::Integer));
+        let (s3, bools) = h.get_booleans(&of(BaseType::Boolean));
+        assert_eq!((s1, s2, s3), (OK, OK, OK), "{:#?}", h.take());
+        (bits(&reals), ints, bools)
+    };
+    let before = all(&h);
+    let mut refused = 0;
+    for var in VARIABLES {
+        let base = var.ty.base();
+        let vrs = [var.vr()];
+        let needles = |func: &'static str| {
+            [func, &format!("`{}`", var.name), &format!("a {base:?} variable")].map(String::from)
+        };
+        let mut check = |func: &'static str, status: fmi2Status| {
+            let n = needles(func);
+            h.expect_error(status, &[n[0].as_str(), n[1].as_str(), n[2].as_str()]);
+            refused += 1;
+        };
+        unsafe {
+            if base != BaseType::Real {
+                check("fmi2GetReal", h.get_reals(&vrs).0);
+                check("fmi2SetReal", h.set_reals(&vrs, &[1.0]));
+            }
+            if base != BaseType::Integer {
+                check("fmi2GetInteger", h.get_integers(&vrs).0);
+                check("fmi2SetInteger", fmi2SetInteger(h.c, vrs.as_ptr(), 1, [1].as_ptr()));
+            }
+            if base != BaseType::Boolean {
+                check("fmi2GetBoolean", h.get_booleans(&vrs).0);
+                check("fmi2SetBoolean", fmi2SetBoolean(h.c, vrs.as_ptr(), 1, [1].as_ptr()));
+            }
+            let mut out: [fmi2String; 1] = [null()];
+            check("fmi2GetString", fmi2GetString(h.c, vrs.as_ptr(), 1, out.as_mut_ptr()));
+            assert!(out[0].is_null());
+            let text = [c"1".as_ptr()];
+            check("fmi2SetString", fmi2SetString(h.c, vrs.as_ptr(), 1, text.as_ptr()));
+        }
+    }
+    // Each variable: 2 functions of each of the 2 other numeric types, and 2 string ones.
+    assert_eq!(refused, VARIABLES.len() * 6);
+    for bad in [VARIABLES.len() as u32, 9999, u32::MAX] {
+        let msg = format!("unknown value reference {bad}");
+        let mut out: [fmi2String; 1] = [null()];
+        let s = unsafe { fmi2GetString(h.c, [bad].as_ptr(), 1, out.as_mut_ptr()) };
+        h.expect_error(s, &["fmi2GetString", &msg]);
+        let s = unsafe { fmi2SetString(h.c, [bad].as_ptr(), 1, [c"1".as_ptr()].as_ptr()) };
+        h.expect_error(s, &["fmi2SetString", &msg]);
+    }
+    assert_eq!(all(&h), before, "no value changed");
+    h.expect_ok(h.exit());
 }
 
 // ===== 7. bad parameter values ==================================================================
@@ -904,6 +1259,63 @@ fn out_of_range_parameters_are_refused_and_leave_values_unchanged() {
     h.expect_ok(h.exit());
 }
 
+/// The range of a real parameter or the input, as the refusals state it.
+fn real_range(var: Var) -> &'static str {
+    match var {
+        Var::L | Var::Ei | Var::M2 | Var::TRot => "positive and finite",
+        Var::M | Var::JC | Var::R | Var::Atol | Var::FixedStep => "non-negative and finite",
+        Var::G | Var::PhiEnd | Var::Phi => "finite",
+        other => panic!("{other:?} is not a real parameter or input"),
+    }
+}
+
+/// NaN and ±Inf for every real parameter and the input, in every state where they may be
+/// set: refused with a message naming the variable, the value and its whole allowed range
+/// (`EI` = NaN: "must be positive and finite", not just "finite"); the value is unchanged.
+#[test]
+fn non_finite_values_are_refused_with_the_whole_range_and_change_nothing() {
+    let _g = shared();
+    let non_finite = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+    let h = Host::new("non-finite");
+    for mode in ["instantiated", "initialization mode"] {
+        if mode == "initialization mode" {
+            h.expect_ok(h.setup(None, 0.0, None));
+            h.expect_ok(h.enter());
+        }
+        for var in REAL_PARAMS.into_iter().chain([Var::Phi]) {
+            for x in non_finite {
+                let s = h.set_real(var, x);
+                let value = format!("`{}` = {x:?}", var.info().name);
+                let range = format!("out of range: must be {}", real_range(var));
+                let r = h.expect_error(s, &["fmi2SetReal: ", &value, &range]);
+                assert!(r.message.ends_with(real_range(var)), "{mode}: {}", r.message);
+            }
+        }
+    }
+    for var in REAL_PARAMS.into_iter().chain([Var::Phi]) {
+        assert_eq!(h.real(var).to_bits(), table_real(var).to_bits(), "{var:?}");
+    }
+    // stepComplete: the input is refused the same way and keeps its value; a fixed
+    // parameter is refused as such whatever its value.
+    h.expect_ok(h.exit());
+    h.expect_ok(h.set_real(Var::Phi, 0.125));
+    for x in non_finite {
+        let s = h.set_real(Var::Phi, x);
+        h.expect_error(s, &["fmi2SetReal: ", &format!("`phi` = {x:?}"), "must be finite"]);
+        assert_eq!(h.real(Var::Phi), 0.125);
+        let s = h.set_real(Var::Ei, x);
+        h.expect_error(s, &["fmi2SetReal", "`EI`", "fixed parameter"]);
+        for order in [1, 2] {
+            let s = h.set_derivative(Var::Phi, order, x);
+            let needle = format!("order {order} of `phi` = {x}");
+            h.expect_error(s, &["fmi2SetRealInputDerivatives", &needle, "must be finite"]);
+        }
+    }
+    assert_eq!(h.real(Var::Ei), 1000.0);
+    h.expect_ok(h.step(0.0, 0.01));
+    assert_eq!(h.real(Var::Phi), 0.125);
+}
+
 // ===== 8. fmi2DoStep arguments ==================================================================
 
 #[test]
@@ -920,6 +1332,9 @@ fn do_step_checks_its_arguments() {
         let s = h.step(tc, 0.01);
         h.expect_error(s, &["fmi2DoStep", "currentCommunicationPoint", "does not match"]);
     }
+    // A step below the resolution of t would not advance: refused, not taken as a no-op.
+    let s = h.step(t, 1e-30);
+    h.expect_error(s, &["fmi2DoStep", "communicationStepSize = 1e-30", "would not advance"]);
     // The failed calls left the instance in stepComplete at t.
     assert_eq!(h.real_status(LAST_SUCCESSFUL_TIME), (OK, t));
     // Rounding of the host's tc is tolerated: one ulp either way.
@@ -1538,6 +1953,173 @@ fn logging_is_silent_when_off_and_errors_always_go_out() {
     assert!(h.take().is_empty());
 }
 
+/// Debug logging off (loggingOn = false and no fmi2SetDebugLogging): a whole run with 100
+/// communication steps, each with SetReal, DoStep, GetReal and the status queries, FMU
+/// states, Terminate and Reset, calls the logger not once. Then an error and a discarded
+/// step give exactly one record each.
+#[test]
+fn a_run_with_logging_off_logs_nothing_at_all() {
+    let _g = shared();
+    let h = Host::new("silent");
+    let mut statuses = vec![
+        h.setup(Some(1e-6), 0.0, Some(2.0)),
+        h.set_real(Var::Ei, 1200.0),
+        h.set_integer(Var::MaxOrder, 4),
+        h.set_boolean(Var::StabilityGuard, true),
+        h.enter(),
+        h.get_reals(&OUTPUTS.map(vr)).0,
+        h.exit(),
+    ];
+    let dt = 0.01;
+    for k in 0..100 {
+        let tc = k as f64 * dt;
+        statuses.push(h.set_real(Var::Phi, paper_phi(tc)));
+        statuses.push(h.step(tc, dt));
+        statuses.push(h.get_reals(&OUTPUTS.map(vr)).0);
+        statuses.push(h.get_integers(&[vr(Var::Formulation)]).0);
+        statuses.push(h.real_status(LAST_SUCCESSFUL_TIME).0);
+        statuses.push(h.boolean_status(TERMINATED).0);
+        if k % 25 == 0 {
+            let mut s: fmi2FMUstate = null_mut();
+            statuses.push(h.get_state(&mut s));
+            statuses.push(h.set_state(s));
+            let bytes = h.serialize(s);
+            let mut d: fmi2FMUstate = null_mut();
+            statuses.push(h.deserialize(&bytes, &mut d));
+            statuses.push(h.free_state(&mut s));
+            statuses.push(h.free_state(&mut d));
+        }
+    }
+    statuses.push(h.set_derivative(Var::Phi, 1, 0.0));
+    statuses.push(h.terminate());
+    statuses.push(h.reset());
+    assert_eq!(statuses.len(), 7 + 100 * 6 + 4 * 5 + 3);
+    let records = h.log.records();
+    assert!(statuses.iter().all(|s| *s == OK), "{statuses:?}: {records:#?}");
+    assert!(records.is_empty(), "logging is off: {records:#?}");
+
+    let s = h.step(0.0, dt);
+    let records = h.take();
+    assert_eq!(s, ERROR);
+    assert_eq!(records.len(), 1, "{records:#?}");
+    assert_eq!((records[0].status, records[0].category.as_str()), (ERROR, "logStatusError"));
+    assert!(records[0].message.starts_with("fmi2DoStep: illegal call sequence"));
+    stiff_fixed_step(&h);
+    let s = h.step(0.0, 0.5);
+    let records = h.take();
+    assert_eq!(s, DISCARD);
+    assert_eq!(records.len(), 1, "{records:#?}");
+    assert_eq!((records[0].status, records[0].category.as_str()), (DISCARD, "logStatusDiscard"));
+}
+
+/// Debug logging on: each call gives exactly one record (none per internal step), in
+/// category logCalls, naming the call and showing its arguments and outcome; errors come
+/// in logStatusError instead. Switching categories one by one selects what comes out.
+#[test]
+fn with_logging_on_every_call_is_traced_once_with_its_arguments() {
+    let _g = shared();
+    let mut h = Host::new("traced");
+    let one = |h: &Host, func: &str, status: fmi2Status, needles: &[&str]| {
+        let records = h.take();
+        assert_declared_categories(&records);
+        assert_eq!(status, OK, "{func}: {records:#?}");
+        assert_eq!(records.len(), 1, "{func}: one record per call: {records:#?}");
+        let r = &records[0];
+        assert_eq!((r.status, r.category.as_str()), (OK, "logCalls"), "{r:?}");
+        assert!(r.message.starts_with(&format!("{func}: ")), "{func}: {r:?}");
+        for n in needles {
+            assert!(r.message.contains(n), "{func}: {n:?} not in {:?}", r.message);
+        }
+    };
+    // nCategories = 0: all categories.
+    let st = h.debug_logging(true, &[]);
+    one(&h, "fmi2SetDebugLogging", st, &["loggingOn = true"]);
+    let st = h.set_real(Var::Ei, 1200.0);
+    one(&h, "fmi2SetReal", st, &[&format!("`EI` ({}) = 1200.0", vr(Var::Ei))]);
+    let st = unsafe {
+        fmi2SetInteger(h.c, [vr(Var::MaxOrder), vr(Var::PhiSource)].as_ptr(), 2, [4, 1].as_ptr())
+    };
+    one(&h, "fmi2SetInteger", st, &["`max_order`", "= 4", "`phi_source`", "= 1"]);
+    let st = h.set_boolean(Var::StabilityGuard, true);
+    one(&h, "fmi2SetBoolean", st, &["`stability_guard`", "= true"]);
+    let st = h.setup(Some(1e-6), 0.0, Some(2.0));
+    one(&h, "fmi2SetupExperiment", st, &["1e-6", "2.0"]);
+    let st = h.enter();
+    one(&h, "fmi2EnterInitializationMode", st, &["initialization mode"]);
+    let (st, y) = h.get_reals(&[vr(Var::L), vr(Var::V1)]);
+    one(&h, "fmi2GetReal", st, &["`l`", "= 2.5", "`v1`", &format!("= {:?}", y[1])]);
+    let st = h.exit();
+    one(&h, "fmi2ExitInitializationMode", st, &["t = 0.0"]);
+    let dt = 0.01;
+    let mut tc = 0.0;
+    for _ in 0..100 {
+        let st = h.set_real(Var::Phi, paper_phi(tc));
+        one(&h, "fmi2SetReal", st, &["`phi`"]);
+        let st = h.step(tc, dt);
+        one(&h, "fmi2DoStep", st, &[&format!("tc = {tc}, h = {dt}")]);
+        tc += dt;
+    }
+    let (st, ints) = h.get_integers(&[vr(Var::Formulation)]);
+    let listed = format!("`formulation` ({}) = {}", vr(Var::Formulation), ints[0]);
+    one(&h, "fmi2GetInteger", st, &[&listed]);
+    let (st, _) = h.get_booleans(&[vr(Var::StabilityGuard)]);
+    one(&h, "fmi2GetBoolean", st, &["`stability_guard`", "= true"]);
+    let st = h.set_derivative(Var::Phi, 1, 0.5);
+    one(&h, "fmi2SetRealInputDerivatives", st, &["order [1]", "value [0.5]"]);
+    let (st, t) = h.real_status(LAST_SUCCESSFUL_TIME);
+    one(&h, "fmi2GetRealStatus", st, &[&format!("fmi2LastSuccessfulTime = {t:?}")]);
+    let st = h.boolean_status(TERMINATED).0;
+    one(&h, "fmi2GetBooleanStatus", st, &["fmi2Terminated = false"]);
+    let mut s: fmi2FMUstate = null_mut();
+    let st = h.get_state(&mut s);
+    one(&h, "fmi2GetFMUstate", st, &["state `step complete`", &format!("t = {t:?}")]);
+    let mut size = 0;
+    let st = unsafe { fmi2SerializedFMUstateSize(h.c, s, &mut size) };
+    one(&h, "fmi2SerializedFMUstateSize", st, &[&format!("{size} bytes")]);
+    let mut bytes = vec![0u8; size];
+    let p = bytes.as_mut_ptr() as *mut fmi2Byte;
+    let st = unsafe { fmi2SerializeFMUstate(h.c, s, p, size) };
+    one(&h, "fmi2SerializeFMUstate", st, &[&format!("{size} bytes")]);
+    let st = h.deserialize(&bytes, &mut s);
+    one(&h, "fmi2DeSerializeFMUstate", st, &[&format!("{size} bytes"), "`step complete`"]);
+    let st = h.set_state(s);
+    one(&h, "fmi2SetFMUstate", st, &["restored"]);
+    let st = h.free_state(&mut s);
+    one(&h, "fmi2FreeFMUstate", st, &["a snapshot"]);
+    let st = h.free_state(&mut s);
+    one(&h, "fmi2FreeFMUstate", st, &["NULL"]);
+    let st = h.terminate();
+    one(&h, "fmi2Terminate", st, &[&format!("t = {t:?}")]);
+    let st = h.reset();
+    one(&h, "fmi2Reset", st, &["instantiated"]);
+
+    // An error: one record, in logStatusError, not traced as well.
+    let st = h.step(0.0, dt);
+    let records = h.take();
+    assert_eq!(st, ERROR);
+    assert_eq!(records.len(), 1, "{records:#?}");
+    assert_eq!(records[0].category, "logStatusError");
+
+    // Only logStatusError: calls are no longer traced (switching logCalls off is silent),
+    // errors still come out.
+    assert_eq!(h.debug_logging(false, &[c"logAll"]), OK);
+    assert_eq!(h.debug_logging(true, &[c"logStatusError"]), OK);
+    assert!(h.take().is_empty());
+    assert_eq!(h.setup(None, 0.0, None), OK);
+    assert!(h.take().is_empty());
+    let st = h.exit();
+    h.expect_error(st, &["fmi2ExitInitializationMode", "illegal call sequence"]);
+    // logCalls alone again.
+    let st = h.debug_logging(true, &[c"logCalls"]);
+    one(&h, "fmi2SetDebugLogging", st, &["logCalls"]);
+    let st = h.enter();
+    one(&h, "fmi2EnterInitializationMode", st, &[]);
+    // fmi2FreeInstance is traced too.
+    unsafe { fmi2FreeInstance(h.c) };
+    h.c = null_mut();
+    one(&h, "fmi2FreeInstance", OK, &["instance `traced`"]);
+}
+
 // ===== 13. version =============================================================================
 
 #[test]
@@ -1709,4 +2291,37 @@ fn instances_run_concurrently_on_threads() {
             assert_eq!(rows, alone[stiff as usize]);
         }
     }
+}
+
+/// A step so short that h² underflows (the Hermite piece of φ from the host's values would
+/// be 0/0), or a jump of φ so large that its slopes overflow: the step is discarded with a
+/// message, never a panic (fmi2Fatal). A step that does not even advance t is refused.
+#[test]
+fn steps_whose_input_cannot_be_extrapolated_are_discarded_not_fatal() {
+    let _g = shared();
+    // (first step, its h, φ for the second step, its h): the second is the one that fails.
+    let cases =
+        [(false, 0.0, 0.5, 1e-200), (true, 1e-3, 1e300, 1e-3), (true, 1e-3, -f64::MAX, 1e-3)];
+    for (first, t, phi, h_step) in cases {
+        let h = Host::new("extrapolation");
+        h.initialize();
+        h.expect_ok(h.set_real(Var::Phi, 0.0));
+        if first {
+            h.expect_ok(h.step(0.0, t));
+        }
+        h.expect_ok(h.set_real(Var::Phi, phi));
+        let s = h.step(t, h_step);
+        let r = h.expect_status(s, DISCARD, &["fmi2DoStep: integration failed: "]);
+        assert!(r.message.contains("not finite"), "h = {h_step:e}, phi = {phi:e}: {r:?}");
+        assert_eq!(h.real_status(LAST_SUCCESSFUL_TIME), (OK, t));
+        assert_eq!(h.boolean_status(TERMINATED), (OK, fmi2True));
+        h.expect_ok(h.terminate());
+    }
+    // h = 1e-197 at t = 1e-3: t + h = t. Refused, and the run goes on.
+    let h = Host::new("no advance");
+    h.initialize();
+    h.expect_ok(h.step(0.0, 1e-3));
+    let s = h.step(1e-3, 1e-197);
+    h.expect_error(s, &["fmi2DoStep", "would not advance"]);
+    h.expect_ok(h.step(1e-3, 1e-3));
 }

@@ -139,11 +139,22 @@ pub(super) struct Values {
 }
 
 /// A value of any FMI base type.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, PartialEq)]
 pub(super) enum Value {
     Real(f64),
     Integer(i32),
     Boolean(bool),
+}
+
+/// The bare value, as the traces show it.
+impl fmt::Debug for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Value::Real(x) => write!(f, "{x:?}"),
+            Value::Integer(k) => write!(f, "{k:?}"),
+            Value::Boolean(b) => write!(f, "{b:?}"),
+        }
+    }
 }
 
 impl Values {
@@ -184,20 +195,22 @@ impl Values {
         };
         match value {
             Value::Real(x) => {
-                if !x.is_finite() {
-                    return bad("finite", x.to_string());
-                }
-                let positive = x > 0.0;
+                // Non-finite values are refused with the variable's whole range, not just
+                // "finite": `EI` = NaN says "positive and finite".
+                let finite = x.is_finite();
                 match var.var {
                     Var::L | Var::Ei | Var::M | Var::M2 | Var::JC | Var::R | Var::G => {
                         self.params.set(var.name, x).map_err(|e| e.to_string())?;
                     }
-                    Var::TRot if positive => self.law.t_rot = x,
-                    Var::TRot => return bad("positive", x.to_string()),
+                    Var::TRot if finite && x > 0.0 => self.law.t_rot = x,
+                    Var::TRot => return bad("positive and finite", format!("{x:?}")),
+                    Var::Atol if finite && x >= 0.0 => self.atol = x,
+                    Var::FixedStep if finite && x >= 0.0 => self.fixed_step = x,
+                    Var::Atol | Var::FixedStep => {
+                        return bad("non-negative and finite", format!("{x:?}"))
+                    }
+                    Var::PhiEnd | Var::Phi if !finite => return bad("finite", format!("{x:?}")),
                     Var::PhiEnd => self.law.phi_end = x,
-                    Var::Atol if x >= 0.0 => self.atol = x,
-                    Var::FixedStep if x >= 0.0 => self.fixed_step = x,
-                    Var::Atol | Var::FixedStep => return bad("non-negative", x.to_string()),
                     Var::Phi => self.phi = x,
                     _ => unreachable!("outputs are rejected before, other types by type"),
                 }
@@ -401,6 +414,24 @@ fn category_of(status: Status) -> &'static str {
     }
 }
 
+/// "`name` (vr) = value, …" for the traces of get and set calls; formatted only when a
+/// trace is written.
+struct Listing<'a, T>(&'a [u32], &'a [T]);
+
+impl<T: fmt::Debug> fmt::Display for Listing<'_, T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (k, (vr, value)) in self.0.iter().zip(self.1).enumerate() {
+            let name = Var::from_vr(*vr).map_or("?", |v| v.info().name);
+            let sep = if k == 0 { "" } else { ", " };
+            write!(f, "{sep}`{name}` ({vr}) = {value:?}")?;
+        }
+        if self.0.is_empty() {
+            write!(f, "no variables")?;
+        }
+        Ok(())
+    }
+}
+
 impl Instance {
     /// fmi2Instantiate. `None`, after logging why, for an empty name, a GUID that is not
     /// this model's, or a type other than co-simulation.
@@ -476,6 +507,28 @@ impl Instance {
         if self.logging.0[4] {
             (self.log)(Status::Ok, "logCalls", &msg.to_string());
         }
+    }
+
+    /// Traces an FMU-state call with the instance's state and time afterwards.
+    fn trace_state(&mut self, what: &str) {
+        let (state, t) = (self.core.state, self.core.time);
+        self.trace(format_args!("{what}: state `{}`, t = {t:?}", state.name()));
+    }
+
+    /// fmi2FreeInstance: traces the call; the caller then drops the instance. Allowed in
+    /// every state, fatal included: freeing touches no model data, and a host that frees a
+    /// fatal instance (which FMI 2.0 does not ask of it) should not leak it.
+    pub fn trace_free(&mut self) {
+        if self.logging.0[4] {
+            let msg = format!("fmi2FreeInstance: instance `{}`", self.name);
+            (self.log)(Status::Ok, "logCalls", &msg);
+        }
+    }
+
+    /// Refuses every call on a fatal instance before the call touches anything (its
+    /// arguments included): logs the illegal call and returns false.
+    pub fn check_not_fatal(&mut self, func: &str) -> bool {
+        self.allowed(func, mask::ANY_BUT_FATAL)
     }
 
     /// Checks that `func` may be called in the current state; logs and returns false if not.
@@ -575,6 +628,7 @@ impl Instance {
         }
         self.core.state = State::InitializationMode;
         self.core.cache = None;
+        self.trace(format_args!("fmi2EnterInitializationMode: state `initialization mode`"));
         Status::Ok
     }
 
@@ -597,6 +651,7 @@ impl Instance {
                 self.core.terminated = false;
                 self.core.cache = None;
                 self.core.state = State::StepComplete;
+                self.trace(format_args!("{F}: integrator started at t = {t0:?}"));
                 Status::Ok
             }
             Err(msg) => {
@@ -612,6 +667,8 @@ impl Instance {
             return Status::Error;
         }
         self.core.state = State::Terminated;
+        let t = self.core.time;
+        self.trace(format_args!("fmi2Terminate: at t = {t:?}"));
         Status::Ok
     }
 
@@ -621,6 +678,7 @@ impl Instance {
             return Status::Error;
         }
         self.core = Core::new();
+        self.trace(format_args!("fmi2Reset: back to `instantiated` with the start values"));
         Status::Ok
     }
 
@@ -712,7 +770,7 @@ impl Instance {
         Ok(Value::Real(x))
     }
 
-    fn get_all<T>(
+    fn get_all<T: fmt::Debug>(
         &mut self,
         func: &str,
         base: BaseType,
@@ -735,6 +793,7 @@ impl Instance {
                 Err(status) => return status,
             }
         }
+        self.trace(format_args!("{func}: {}", Listing(vrs, &*out)));
         Status::Ok
     }
 
@@ -768,7 +827,10 @@ impl Instance {
             return Status::Error;
         }
         match vrs.first() {
-            None => Status::Ok,
+            None => {
+                self.trace(format_args!("fmi2GetString: no variables"));
+                Status::Ok
+            }
             Some(vr) => {
                 self.lookup("fmi2GetString", *vr, BaseType::String).err().unwrap_or(Status::Error)
             }
@@ -813,6 +875,7 @@ impl Instance {
         }
         self.core.values = next;
         self.core.cache = None;
+        self.trace(format_args!("{func}: {}", Listing(vrs, values)));
         Status::Ok
     }
 
@@ -840,7 +903,10 @@ impl Instance {
             return Status::Error;
         }
         match vrs.first() {
-            None => Status::Ok,
+            None => {
+                self.trace(format_args!("fmi2SetString: no variables"));
+                Status::Ok
+            }
             Some(vr) => {
                 self.lookup("fmi2SetString", *vr, BaseType::String).err().unwrap_or(Status::Error)
             }
@@ -891,6 +957,7 @@ impl Instance {
         }
         self.core.pending = pending;
         self.core.cache = None;
+        self.trace(format_args!("{F}: vr {vrs:?}, order {orders:?}, value {values:?}"));
         Status::Ok
     }
 
@@ -929,6 +996,15 @@ impl Instance {
                 ),
             );
         }
+        if tc + h == tc {
+            return self.fail(
+                Status::Error,
+                format!(
+                    "{F}: communicationStepSize = {h:?} is below the resolution of the time \
+                     tc = {tc:?} (tc + h = tc): the step would not advance"
+                ),
+            );
+        }
         let target = tc + h;
         if let Some(stop) = self.core.setup.stop_time {
             if target > stop + 64.0 * f64::EPSILON * stop.abs().max(h) {
@@ -944,11 +1020,13 @@ impl Instance {
         let run = run.as_mut().expect("stepComplete has an integrator");
         let previous = run.piece();
         let result = match values.phi_source {
-            PhiSource::Law => run.advance_law(&values.law, target, target),
+            PhiSource::Law => {
+                run.advance_law(&values.law, target, target).map_err(|e| e.to_string())
+            }
             PhiSource::Input => {
                 history.push(tc, values.phi);
                 let signal = if pending.iter().any(Option::is_some) {
-                    TaylorSignal {
+                    Some(TaylorSignal {
                         t0: tc,
                         at_t0: Phi {
                             phi: values.phi,
@@ -956,15 +1034,26 @@ impl Instance {
                             ddphi: pending[1].unwrap_or(0.0),
                         },
                         jerk: 0.0,
-                    }
+                    })
                 } else {
+                    // `None` when the coefficients are not finite: values so far apart that
+                    // the slopes overflow, or a step so short that h² underflows.
                     let start = run.piece().eval(tc);
                     let degree = values.phi_extrapolation as usize;
-                    history.piece(degree, start, h).expect("a sample was just pushed, h > 0")
+                    history.piece(degree, start, h)
                 };
                 *pending = [None, None];
-                run.switch_piece(PhiPiece::Taylor(signal))
-                    .and_then(|()| run.advance(target, target))
+                match signal {
+                    Some(signal) => run
+                        .switch_piece(PhiPiece::Taylor(signal))
+                        .and_then(|()| run.advance(target, target))
+                        .map_err(|e| e.to_string()),
+                    None => Err(format!(
+                        "the input `phi` over the step is not finite when extrapolated from \
+                         its values (phi = {:?} at t = {tc}, h = {h:?})",
+                        values.phi
+                    )),
+                }
             }
         };
         let result = result.map_err(|e| {
@@ -1027,7 +1116,9 @@ impl Instance {
         if kind != STATUS_LAST_SUCCESSFUL_TIME {
             return Err(self.fail(Status::Error, format!("{F}: status kind {kind} is not provided: only fmi2LastSuccessfulTime ({STATUS_LAST_SUCCESSFUL_TIME})")));
         }
-        Ok(self.core.last_successful_time)
+        let t = self.core.last_successful_time;
+        self.trace(format_args!("{F}: fmi2LastSuccessfulTime = {t:?}"));
+        Ok(t)
     }
 
     /// fmi2GetBooleanStatus: fmi2Terminated.
@@ -1039,7 +1130,9 @@ impl Instance {
         if kind != STATUS_TERMINATED {
             return Err(self.fail(Status::Error, format!("{F}: status kind {kind} is not provided: only fmi2Terminated ({STATUS_TERMINATED})")));
         }
-        Ok(self.core.terminated)
+        let terminated = self.core.terminated;
+        self.trace(format_args!("{F}: fmi2Terminated = {terminated}"));
+        Ok(terminated)
     }
 
     /// fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false).
@@ -1061,6 +1154,7 @@ impl Instance {
         if !self.allowed("fmi2GetFMUstate", mask::GET | mask::INSTANTIATED) {
             return Err(Status::Error);
         }
+        self.trace_state("fmi2GetFMUstate: new snapshot");
         Ok(Box::new(self.core.clone()))
     }
 
@@ -1070,6 +1164,7 @@ impl Instance {
             return Status::Error;
         }
         snapshot.clone_from(&self.core);
+        self.trace_state("fmi2GetFMUstate: into the existing snapshot");
         Status::Ok
     }
 
@@ -1079,14 +1174,18 @@ impl Instance {
             return Status::Error;
         }
         self.core.clone_from(snapshot);
+        self.trace_state("fmi2SetFMUstate: restored");
         Status::Ok
     }
 
     /// Checks that fmi2FreeFMUstate may be called (it may, in every state but fatal).
-    pub fn check_free_state(&mut self) -> Status {
+    /// `is_null`: the host passed a pointer to NULL, so there is nothing to free.
+    pub fn check_free_state(&mut self, is_null: bool) -> Status {
         if !self.allowed("fmi2FreeFMUstate", mask::ANY_BUT_FATAL) {
             return Status::Error;
         }
+        let what = if is_null { "NULL, nothing to free" } else { "a snapshot" };
+        self.trace(format_args!("fmi2FreeFMUstate: {what}"));
         Status::Ok
     }
 
@@ -1095,7 +1194,9 @@ impl Instance {
         if !self.allowed("fmi2SerializeFMUstate", mask::GET | mask::INSTANTIATED) {
             return Err(Status::Error);
         }
-        Ok(state::serialize(snapshot))
+        let bytes = state::serialize(snapshot);
+        self.trace(format_args!("fmi2SerializeFMUstate: {} bytes", bytes.len()));
+        Ok(bytes)
     }
 
     /// fmi2SerializedFMUstateSize.
@@ -1103,7 +1204,9 @@ impl Instance {
         if !self.allowed("fmi2SerializedFMUstateSize", mask::GET | mask::INSTANTIATED) {
             return Err(Status::Error);
         }
-        Ok(state::serialize(snapshot).len())
+        let n = state::serialize(snapshot).len();
+        self.trace(format_args!("fmi2SerializedFMUstateSize: {n} bytes"));
+        Ok(n)
     }
 
     /// fmi2DeSerializeFMUstate: a snapshot from untrusted bytes. Every field is checked;
@@ -1113,9 +1216,12 @@ impl Instance {
         if !self.allowed(F, mask::GET | mask::INSTANTIATED) {
             return Err(Status::Error);
         }
-        state::deserialize(bytes)
+        let n = bytes.len();
+        let core = state::deserialize(bytes)
             .map(Box::new)
-            .map_err(|e| self.fail(Status::Error, format!("{F}: {e}")))
+            .map_err(|e| self.fail(Status::Error, format!("{F}: {e}")))?;
+        self.trace(format_args!("{F}: {n} bytes, a snapshot in state `{}`", core.state.name()));
+        Ok(core)
     }
 }
 

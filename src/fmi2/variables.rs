@@ -445,23 +445,29 @@ pub const VARIABLES: &[Variable] = &[
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the
 /// interface changes it. Formatted like a UUID, in braces.
+///
+/// Kept in a fixed-size static, not a `String`: a host that unloads the library
+/// (`dlclose`) cannot free what a static points to, and the C host test under valgrind
+/// counts every such block as lost, once per load.
 pub fn guid() -> &'static str {
-    static GUID: OnceLock<String> = OnceLock::new();
-    GUID.get_or_init(|| {
+    static GUID: OnceLock<[u8; 38]> = OnceLock::new();
+    let bytes = GUID.get_or_init(|| {
         let text = format!(
             "{MODEL_IDENTIFIER}|{MODEL_NAME}|{MODEL_DESCRIPTION}|{DEFAULT_EXPERIMENT:?}|\
              {CAPABILITIES:?}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
         );
         let h = fnv1a_128(text.as_bytes());
-        format!(
+        let formatted = format!(
             "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
             (h >> 96) as u32,
             (h >> 80) as u16,
             (h >> 64) as u16,
             (h >> 48) as u16,
             h & 0xffff_ffff_ffff
-        )
-    })
+        );
+        formatted.as_bytes().try_into().expect("a braced UUID has 38 characters")
+    });
+    std::str::from_utf8(bytes).expect("hex digits, dashes and braces")
 }
 
 /// FNV-1a, 128-bit variant (Fowler, Noll, Vo; offset basis and prime from the FNV

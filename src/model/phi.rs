@@ -175,7 +175,9 @@ impl ValueHistory {
     /// The piece of φ for the step [t0, t0 + h] that starts at the newest sample's time t0:
     /// the cubic Hermite polynomial from `start` (φ and φ' at t0 of the piece in use; its φ''
     /// is not used) to the value and slope at t0 + h of [`extrapolation`](Self::extrapolation).
-    /// `None` without samples or for h ≤ 0.
+    /// `None` without samples, for h ≤ 0, or when a coefficient is not finite: a step so
+    /// short that h² or h³ underflows (h = 1e-200 gives 0/0), or values so far apart that the
+    /// slopes overflow.
     pub fn piece(&self, degree: usize, start: Phi, h: f64) -> Option<TaylorSignal> {
         let ext = self.extrapolation(degree)?;
         if h.is_nan() || h <= 0.0 {
@@ -187,11 +189,13 @@ impl ValueHistory {
         // φ(t0 + s) = a + b s + c2 s² + c3 s³ with φ(t0 + h) = target.phi, φ'(t0 + h) = target.dphi.
         let c2 = (3.0 * rise - (2.0 * b + target.dphi) * h) / (h * h);
         let c3 = ((b + target.dphi) * h - 2.0 * rise) / (h * h * h);
-        Some(TaylorSignal {
+        let piece = TaylorSignal {
             t0: ext.t0,
             at_t0: Phi { phi: a, dphi: b, ddphi: 2.0 * c2 },
             jerk: 6.0 * c3,
-        })
+        };
+        let finite = [piece.t0, a, b, piece.at_t0.ddphi, piece.jerk].iter().all(|x| x.is_finite());
+        finite.then_some(piece)
     }
 }
 
@@ -364,5 +368,19 @@ mod tests {
         assert!((end.dphi - target.dphi).abs() < 1e-12);
         assert!(hist.piece(3, start, 0.0).is_none());
         assert!(ValueHistory::default().piece(3, start, 0.1).is_none());
+    }
+
+    /// Found by fuzzing (`api_sequence`): a step of h = 1e-197 makes h² underflow to 0, and
+    /// the Hermite coefficients 0/0. No piece, rather than a NaN one.
+    #[test]
+    fn hermite_piece_refuses_steps_whose_powers_underflow() {
+        let mut hist = ValueHistory::default();
+        hist.push(0.0, 0.0);
+        hist.push(1.0, 0.0);
+        let start = Phi::default();
+        assert!(hist.piece(3, start, 1e-197).is_none());
+        assert!(hist.piece(3, start, 1e-100).is_some());
+        hist.push(2.0, 1e300);
+        assert!(hist.piece(3, start, 1e-100).is_none(), "slopes overflow");
     }
 }
