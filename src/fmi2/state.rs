@@ -94,6 +94,27 @@ pub(super) fn deserialize(bytes: &[u8]) -> Result<Core, String> {
     Ok(core)
 }
 
+/// An optional real as a flag and a value, the value 0 when the flag is clear. A reader
+/// refuses a clear flag with any other value: every snapshot then has exactly one byte form,
+/// and accepted bytes serialize back unchanged (found by fuzzing: a `tolerance` left in
+/// beside `tolerance_defined` = 0 was dropped on the way).
+fn visit_optional(
+    v: &mut impl StateVisitor,
+    flag: &'static str,
+    name: &'static str,
+    slot: &mut Option<f64>,
+) -> Result<(), String> {
+    let mut set = slot.is_some();
+    let mut x = slot.unwrap_or(0.0);
+    v.flag(flag, &mut set);
+    v.real(name, &mut x);
+    if !set && x.to_bits() != 0 {
+        return Err(format!("field `{name}` = {x:?} although `{flag}` is 0: must be 0"));
+    }
+    *slot = set.then_some(x);
+    Ok(())
+}
+
 /// Visits every field of a snapshot; the writer reads them, the reader overwrites and
 /// checks them. Fields that index something are converted, and checked, on the way.
 pub(super) fn visit_core(core: &mut Core, v: &mut impl StateVisitor) -> Result<(), String> {
@@ -105,26 +126,15 @@ pub(super) fn visit_core(core: &mut Core, v: &mut impl StateVisitor) -> Result<(
     visit_values(&mut core.values, v)?;
 
     let s = &mut core.setup;
-    let mut tol = s.tolerance.unwrap_or(0.0);
-    let mut has_tol = s.tolerance.is_some();
-    v.flag("tolerance_defined", &mut has_tol);
-    v.real("tolerance", &mut tol);
-    s.tolerance = has_tol.then_some(tol);
+    visit_optional(v, "tolerance_defined", "tolerance", &mut s.tolerance)?;
     v.real("start_time", &mut s.start_time);
-    let mut stop = s.stop_time.unwrap_or(0.0);
-    let mut has_stop = s.stop_time.is_some();
-    v.flag("stop_time_defined", &mut has_stop);
-    v.real("stop_time", &mut stop);
-    s.stop_time = has_stop.then_some(stop);
+    visit_optional(v, "stop_time_defined", "stop_time", &mut s.stop_time)?;
     v.real("time", &mut core.time);
     v.real("last_successful_time", &mut core.last_successful_time);
     v.flag("terminated", &mut core.terminated);
     for (k, slot) in core.pending.iter_mut().enumerate() {
-        let mut x = slot.unwrap_or(0.0);
-        let mut set = slot.is_some();
-        v.flag(["pending_dphi_set", "pending_ddphi_set"][k], &mut set);
-        v.real(["pending_dphi", "pending_ddphi"][k], &mut x);
-        *slot = set.then_some(x);
+        let names = [("pending_dphi_set", "pending_dphi"), ("pending_ddphi_set", "pending_ddphi")];
+        visit_optional(v, names[k].0, names[k].1, slot)?;
     }
     let mut samples: Vec<(f64, f64)> = core.history.samples().collect();
     let mut len = samples.len() as u64;
@@ -278,6 +288,16 @@ fn visit_piece(
     if r.iter().any(|x| !x.is_finite()) {
         return Err("field `piece` holds a non-finite value".into());
     }
+    // The law's piece uses none of the five reals, a held angle only the first: the others
+    // are written as zeros and must read as zeros (one byte form per state).
+    let used = match kind {
+        0 => 0,
+        1 => 1,
+        _ => 5,
+    };
+    if r[used..].iter().any(|x| x.to_bits() != 0) {
+        return Err(format!("field `piece`: a piece of kind {kind} uses only {used} of its reals: the rest must be 0"));
+    }
     *piece = match kind {
         0 => PhiPiece::Turn(values.law),
         1 => PhiPiece::Hold(r[0]),
@@ -339,5 +359,11 @@ impl StateVisitor for Reader<'_> {
             self.error = Some(format!("field `{name}` = {b} is not a flag (0 or 1)"));
         }
         *x = b == 1;
+    }
+    fn discarded(&mut self, name: &'static str, as_written: bool) {
+        if !as_written && self.error.is_none() {
+            self.error =
+                Some(format!("the fields of an absent `{name}` must be as written (zeros)"));
+        }
     }
 }

@@ -516,11 +516,11 @@ impl<const N: usize> Bdf<N> {
     /// 3. `jac` ×N² (column-major); `jac_valid` (flag); `lu` (flag: an LU is present);
     ///    `lu.factors` ×N² (column-major); `lu.perm` ×N (counts). Without an LU the factors
     ///    and the permutation are still visited: a writer gives zeros and the identity, and
-    ///    a reader's values are discarded.
+    ///    a reader's values are discarded (reported through [`StateVisitor::discarded`]).
     /// 4. `gamma`; `gamma_lu`; `rate`; `steps_at_lu` (count); `steps_at_jac` (count);
     ///    `guard.modulus`, `guard.angle` for each of 8 slots; `guard.count` (count).
     /// 5. `started` (flag); `landing` (flag), `landing` (real, 0 when the flag is false,
-    ///    and then discarded on reading).
+    ///    and then discarded on reading, through [`StateVisitor::discarded`]).
     /// 6. The [`Stats`] counters in declaration order, named `stats.steps` … `stats.restarts`.
     pub fn visit_state<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
         v.real("t", &mut self.t);
@@ -549,6 +549,9 @@ impl<const N: usize> Bdf<N> {
         v.flag("lu", &mut has_lu);
         let mut lu = self.lu.clone().unwrap_or_else(Lu::placeholder);
         lu.visit(v);
+        if !has_lu {
+            v.discarded("lu", lu.is_placeholder());
+        }
         self.lu = has_lu.then_some(lu);
         v.real("gamma", &mut self.gamma);
         v.real("gamma_lu", &mut self.gamma_lu);
@@ -561,6 +564,9 @@ impl<const N: usize> Bdf<N> {
         let mut tstop = self.landing.unwrap_or(0.0);
         v.flag("landing", &mut landing);
         v.real("landing", &mut tstop);
+        if !landing {
+            v.discarded("landing", tstop.to_bits() == 0);
+        }
         self.landing = landing.then_some(tstop);
         self.stats.visit(v);
     }

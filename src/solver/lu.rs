@@ -58,6 +58,12 @@ impl<const N: usize> Lu<N> {
         Self { factors: SMatrix::zeros(), perm: std::array::from_fn(|i| i) }
     }
 
+    /// Whether this is bit for bit the [`placeholder`](Self::placeholder).
+    pub(crate) fn is_placeholder(&self) -> bool {
+        self.factors.iter().all(|x| x.to_bits() == 0)
+            && self.perm.iter().enumerate().all(|(i, p)| *p == i)
+    }
+
     /// Visits the factors (column-major), then the permutation.
     pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
         visit_matrix(v, "lu.factors", &mut self.factors);

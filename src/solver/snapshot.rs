@@ -22,6 +22,11 @@ pub trait StateVisitor {
     fn count(&mut self, name: &'static str, x: &mut u64);
     /// A boolean field.
     fn flag(&mut self, name: &'static str, x: &mut bool);
+    /// Called after visiting fields whose values are discarded (those of an absent LU, an
+    /// unset landing time), with whether they held what a writer gives (zeros, the identity
+    /// permutation). A reader may refuse anything else, so that every state has a single
+    /// byte form. By default nothing happens.
+    fn discarded(&mut self, _name: &'static str, _as_written: bool) {}
 }
 
 /// Largest counter a restored state may hold: 2⁵³. Every integer up to it is exact as an
