@@ -7,6 +7,7 @@
 mod bench;
 mod docs;
 mod fmu;
+mod fuzz;
 mod host;
 mod model_description;
 mod python;
@@ -69,6 +70,13 @@ Commands:
           status; --group: one group.
   sweep-case ID
           Run one sweep case and print its result line (used by `sweep`).
+  fuzz [--time SECONDS] [TARGET...]
+          Build the libFuzzer targets of fuzz/ (deserialize: fmi2DeSerializeFMUstate on
+          arbitrary bytes; api_sequence: random sequences of fmi2 calls) with coverage
+          instrumentation on stable Rust, and run each for SECONDS (default 600) on its
+          corpus in target/fuzz/corpus/, replaying fuzz/regressions/. A failing input
+          is written to target/fuzz/artifacts/ and fails the command. `cargo xtask test`
+          runs each target for 15 s.
   help    Print this message.
 ";
 
@@ -106,6 +114,7 @@ fn run(args: &[String]) -> Result {
         "bench-run" => bench::run_round(bench::parse_round(options)?),
         "sweep" => sweep::run(options),
         "sweep-case" => sweep::run_case(options),
+        "fuzz" => fuzz::run(options),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }

@@ -43,6 +43,8 @@ pub fn run(scope: Scope) -> Result {
         // The sweep's representative subset: every row must end as expected (ok within its
         // error bound, or stopped with the expected message).
         report.step("sweep --quick", || crate::sweep::run(&["--quick".to_string()]));
+        // Each fuzz target for a few seconds, replaying fuzz/regressions/ first.
+        report.step("fuzz smoke", crate::fuzz::smoke);
     }
     match (python, binary, fmu) {
         (Some(python), Some(binary), Some(fmu)) => {

@@ -1,0 +1,96 @@
+//! What the fuzz targets share: an instance whose log is recorded, and the checks that hold
+//! after any call, whatever the bytes were.
+//!
+//! The properties (each a panic, which libFuzzer reports as a crash):
+//! - no call panics, and none returns fmi2Fatal (only a caught panic may);
+//! - every fmi2Error or fmi2Discard is logged, with a message that names the function;
+//! - every Real variable that can be read is finite (no NaN is reported as a valid output);
+//! - an accepted serialized state serializes back to the same bytes, and restores an
+//!   instance that then behaves like any other.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use beam_body::fmi2::instance::{Instance, State, Status, FMI2_COSIMULATION};
+use beam_body::fmi2::variables::{guid, BaseType, VARIABLES};
+
+/// The log records of one instance: (status, category, message).
+pub type Records = Rc<RefCell<Vec<(Status, String, String)>>>;
+
+/// A co-simulation instance with a recording logger.
+pub fn instance(logging_on: bool) -> (Instance, Records) {
+    let records: Records = Rc::default();
+    let sink = records.clone();
+    let logger = Box::new(move |status: Status, category: &str, message: &str| {
+        sink.borrow_mut().push((status, category.to_string(), message.to_string()));
+    });
+    let inst = Instance::instantiate("fuzz", FMI2_COSIMULATION, guid(), logger, logging_on)
+        .expect("a valid instantiation");
+    (inst, records)
+}
+
+/// Checks the status of the call `function` made, against the records it logged (those
+/// after `before`).
+pub fn check_status(function: &str, status: Status, records: &Records, before: usize) {
+    assert_ne!(status, Status::Fatal, "{function} returned fmi2Fatal");
+    if matches!(status, Status::Error | Status::Discard) {
+        let log = records.borrow();
+        let logged = log[before..].iter().any(|(s, _, m)| *s == status && m.contains(function));
+        assert!(logged, "{function} returned {status:?} without logging why: {:?}", &log[before..]);
+    }
+}
+
+/// Whether fmi2GetReal is allowed in `state`.
+fn readable(state: State) -> bool {
+    matches!(
+        state,
+        State::InitializationMode
+            | State::StepComplete
+            | State::StepFailed
+            | State::Terminated
+            | State::Error
+    )
+}
+
+/// Reads every Real variable where the state allows it, and checks that each is finite.
+pub fn check_outputs(inst: &mut Instance, records: &Records) {
+    if !readable(inst.state()) {
+        return;
+    }
+    let vrs: Vec<u32> =
+        VARIABLES.iter().filter(|v| v.ty.base() == BaseType::Real).map(|v| v.vr()).collect();
+    let mut out = vec![0.0; vrs.len()];
+    let before = records.borrow().len();
+    let status = inst.get_real(&vrs, &mut out);
+    check_status("fmi2GetReal", status, records, before);
+    if status == Status::Ok {
+        for (vr, x) in vrs.iter().zip(&out) {
+            assert!(x.is_finite(), "fmi2GetReal gave {x} for {}", VARIABLES[*vr as usize].name);
+        }
+    }
+}
+
+/// Bytes of the serialized frame before the payload: magic 8, version 4, GUID 38, payload
+/// length 8 (src/fmi2/state.rs documents the layout).
+pub const HEADER: usize = 8 + 4 + 38 + 8;
+
+/// FNV-1a, 64-bit: the frame's checksum (offset basis and prime from the FNV reference).
+fn fnv1a_64(bytes: &[u8]) -> u64 {
+    bytes
+        .iter()
+        .fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+/// Makes the frame of `bytes` consistent again after a mutation: the payload length and the
+/// checksum. Without this nearly every mutation fails the checksum, and the fuzzer never
+/// reaches the field checks behind it.
+pub fn reseal(bytes: &mut [u8]) {
+    if bytes.len() < HEADER + 8 {
+        return;
+    }
+    let payload = (bytes.len() - HEADER - 8) as u64;
+    bytes[HEADER - 8..HEADER].copy_from_slice(&payload.to_le_bytes());
+    let n = bytes.len() - 8;
+    let sum = fnv1a_64(&bytes[..n]);
+    bytes[n..].copy_from_slice(&sum.to_le_bytes());
+}
