@@ -35,6 +35,7 @@ pub fn run(scope: Scope) -> Result {
         report.step("rust tests", rust_tests);
         return report.finish();
     }
+    report.step("system tools", system_tools);
     let python = report.step("python venv", python::ensure_venv);
     let binary = report.step("build beam-body (release)", build_release_binary);
     let fmu = report.step("package BeamBody.fmu", || crate::fmu::build_package().map(|p| p.0));
@@ -53,6 +54,41 @@ pub fn run(scope: Scope) -> Result {
         _ => report.skip("python tests", "needs the venv, the release binary and the FMU"),
     }
     report.finish()
+}
+
+/// The system programs the suite needs beyond Rust and Python, with the Debian package that
+/// provides each: a C compiler for the C host fixture, a C++ compiler for libFuzzer, and
+/// valgrind for the C host's memcheck runs.
+const SYSTEM_TOOLS: [(&str, &str); 3] = [("cc", "gcc"), ("g++", "g++"), ("valgrind", "valgrind")];
+
+/// Installs the missing [`SYSTEM_TOOLS`] with apt-get when running as root on Debian;
+/// otherwise names them and how to install them.
+fn system_tools() -> Result {
+    let present = |tool: &str| {
+        Command::new(tool)
+            .arg("--version")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    let missing: Vec<&str> =
+        SYSTEM_TOOLS.iter().filter(|(tool, _)| !present(tool)).map(|(_, pkg)| *pkg).collect();
+    if missing.is_empty() {
+        eprintln!("cc, g++ and valgrind are installed");
+        return Ok(());
+    }
+    let root = Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.trim_ascii() == b"0");
+    if !(root && present("apt-get")) {
+        return Err(format!(
+            "missing system packages: {} (Debian: apt-get install {})",
+            missing.join(", "),
+            missing.join(" ")
+        )
+        .into());
+    }
+    run_cmd(Command::new("apt-get").args(["update", "-qq"]))?;
+    run_cmd(Command::new("apt-get").args(["install", "-y", "-qq"]).args(&missing))
 }
 
 fn rust_tests() -> Result {
