@@ -25,8 +25,9 @@ pub fn path() -> PathBuf {
     project_root().join(RELATIVE_PATH)
 }
 
-/// `cargo xtask gen`.
+/// `cargo xtask gen`: the modelDescription, and README.md's variables table.
 pub fn run() -> Result {
+    update_readme()?;
     let text = generate()?;
     let path = path();
     let old = fs::read_to_string(&path).ok();
@@ -53,6 +54,21 @@ pub fn check_fresh() -> Result {
             Err(format!("cannot read {}: {err}; run `cargo xtask gen`", relative(&path)).into())
         }
     }
+}
+
+/// Rewrites README.md's generated variables table if it changed.
+fn update_readme() -> Result {
+    let path = project_root().join("README.md");
+    let old = fs::read_to_string(&path)
+        .map_err(|err| format!("cannot read {}: {err}", relative(&path)))?;
+    let new = crate::docs::readme_with_table(&old)?;
+    if new == old {
+        println!("README.md's variables table is up to date");
+    } else {
+        crate::write_text(&path, &new)?;
+        println!("updated README.md's variables table");
+    }
+    Ok(())
 }
 
 pub fn stale_message() -> String {
@@ -388,6 +404,15 @@ mod tests {
 
     fn f64_of(text: &str) -> f64 {
         text.parse().unwrap_or_else(|err| panic!("{text:?} is not a double: {err}"))
+    }
+
+    /// README.md's variables table is the one `cargo xtask gen` writes from the tables.
+    #[test]
+    fn readme_table_is_fresh() {
+        let path = crate::project_root().join("README.md");
+        let readme = fs::read_to_string(&path).expect("README.md");
+        let expected = crate::docs::readme_with_table(&readme).expect("the markers are there");
+        assert!(readme == expected, "README.md's variables table is stale: run `cargo xtask gen`");
     }
 
     #[test]
