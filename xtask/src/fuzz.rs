@@ -166,8 +166,10 @@ fn run_target(bin: &Path, target: &'static str, seconds: u64) -> Result<Outcome>
         .stderr(log);
     eprintln!("$ {} (log: {})", crate::display(&cmd), relative(&log_path));
     let start = Instant::now();
-    let status =
-        cmd.status().map_err(|e| format!("could not run the fuzz target `{target}`: {e}"))?;
+    let tick = crate::progress::ticker(format!("fuzz {target}"), move || format!("of {seconds} s"));
+    let status = cmd.status().map_err(|e| format!("could not run the fuzz target `{target}`: {e}"));
+    drop(tick);
+    let status = status?;
     let text = fs::read_to_string(&log_path).unwrap_or_default();
     if !status.success() {
         let tail: Vec<&str> = text.lines().rev().take(40).collect();

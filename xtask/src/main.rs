@@ -10,6 +10,7 @@ mod fmu;
 mod fuzz;
 mod host;
 mod model_description;
+mod progress;
 mod python;
 mod summary;
 mod sweep;

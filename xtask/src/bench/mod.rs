@@ -304,6 +304,7 @@ pub fn run(mode: Mode) -> Result {
         }
     };
     if let Some(reference) = script("bench_reference.py") {
+        let _tick = crate::progress::ticker("bench: reference solutions", String::new);
         run_cmd(Command::new(&python).arg(relative(&reference)).current_dir(&root))?;
     }
     let reference_time = phase.elapsed();
@@ -314,6 +315,7 @@ pub fn run(mode: Mode) -> Result {
     let max_seconds = mode.scipy_max_seconds().to_string();
     let phase = Instant::now();
     for round in 0..=rounds {
+        let _tick = crate::progress::ticker(format!("bench: round {round}/{rounds}"), String::new);
         let round_text = round.to_string();
         let t = Instant::now();
         let mut rust_round = Command::new(&runner);
@@ -348,6 +350,7 @@ pub fn run(mode: Mode) -> Result {
 
     let phase = Instant::now();
     if let Some(report) = script("bench_report.py") {
+        let _tick = crate::progress::ticker("bench: report", String::new);
         run_cmd(Command::new(&python).arg(relative(&report)).current_dir(&root))?;
     }
     let report_time = phase.elapsed();

@@ -726,12 +726,20 @@ pub fn run(options: &[String]) -> Result {
     let jobs = std::thread::available_parallelism().map_or(1, |n| n.get()).min(4);
     let next = std::sync::atomic::AtomicUsize::new(0);
     let done = std::sync::Mutex::new(Vec::<(usize, Row)>::new());
+    // A case may take minutes (its limit is 600 s): a progress line between case lines.
+    let finished = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let total = selected.len();
+    let counter = finished.clone();
+    let _tick = crate::progress::ticker("sweep", move || {
+        format!("{}/{total} cases done", counter.load(std::sync::atomic::Ordering::SeqCst))
+    });
     std::thread::scope(|scope| {
         for _ in 0..jobs {
             scope.spawn(|| loop {
                 let n = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
                 let Some(&id) = selected.get(n) else { break };
                 let row = run_child(&exe, id, limit);
+                finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
                 let c = &list[id];
                 let mut done = done.lock().unwrap_or_else(|e| e.into_inner());
                 done.push((id, row.clone()));
