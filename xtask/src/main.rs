@@ -6,6 +6,7 @@
 
 mod bench;
 mod docs;
+mod figures;
 mod fmu;
 mod fuzz;
 mod host;
@@ -78,6 +79,15 @@ Commands:
           corpus in target/fuzz/corpus/, replaying fuzz/regressions/. A failing input
           is written to target/fuzz/artifacts/ and fails the command. `cargo xtask test`
           runs each target for 15 s.
+  figures The paper's Fig. 3 and a drawing of the model:
+          - run scenes/paper.toml at rtol 1e-8 in the formulations reduced (eq. 15),
+            dae (eq. 20+21) and linear (eq. 16), output every Δτ = 0.005 up to τ = 12;
+          - write target/figures/figure3.csv and the measured numbers (extremes,
+            (15) against (20)+(21) and (16), integration error, small-oscillation
+            periods) to target/figures/figure3.txt; fail if (15) and (20)+(21) differ
+            by 1e-3 of the scale or more, or (16) from (15) by 0.5 of it or less;
+          - draw docs/figure3.png and docs/model.png (xtask/python/figures.py).
+          The claims are tested by `cargo test -p xtask figures` (run by `test`).
   help    Print this message.
 ";
 
@@ -116,6 +126,10 @@ fn run(args: &[String]) -> Result {
         "sweep" => sweep::run(options),
         "sweep-case" => sweep::run_case(options),
         "fuzz" => fuzz::run(options),
+        "figures" => {
+            no_options(command, options)?;
+            figures::run()
+        }
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }
