@@ -423,9 +423,15 @@ pub const VARIABLES: &[Variable] = &[
     output(Var::Dv1, "dv1", "m/s", "Rate of the tip deflection"),
     output(Var::Dtheta1, "dtheta1", "rad/s", "Rate of the tip section rotation"),
     output(Var::Du2, "du2", "m/s", "Rate of the hinge's axial displacement"),
-    output(Var::N, "N", "N", "Hinge force on the body along the beam axis (paper eq. 19)"),
-    output(Var::P, "P", "N", "Hinge force on the body across the beam axis (paper eq. 19)"),
-    output(Var::Moment, "M", "N.m", "Hinge moment on the body; -M is the drive torque (eq. 19)"),
+    output(Var::N, "N", "N", "Hinge force of the body on the beam tip, along x (paper eq. 18-19)"),
+    output(Var::P, "P", "N", "Hinge force of the body on the beam tip, along y (paper eq. 18-19)"),
+    output(
+        Var::Moment,
+        "M",
+        "N.m",
+        "Hinge moment of the body on the beam's tip section; -M is the torque the drive applies \
+         to the body (paper eq. 18-19)",
+    ),
     output(
         Var::Drift,
         "drift",
