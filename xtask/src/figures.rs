@@ -19,7 +19,7 @@ use std::fs;
 use std::process::Command;
 
 use beam_body::model::{BeamBody, Formulation};
-use beam_body::sim::{scene_entries, simulate, Scene};
+use beam_body::sim::{simulate, Scene};
 
 use crate::{project_root, relative, run_cmd, target_dir, write_text, Result};
 
@@ -147,13 +147,7 @@ fn extremes(tau: &[f64], y: &[f64]) -> [(f64, f64); 2] {
 
 /// The paper's scene from scenes/paper.toml, on the grid of Fig. 3, at [`RTOL`].
 pub fn paper_scene() -> Result<Scene> {
-    let path = project_root().join(SCENE_FILE);
-    let text = fs::read_to_string(&path)
-        .map_err(|err| format!("cannot read {}: {err}", relative(&path)))?;
-    let mut scene = Scene::default();
-    for (line, key, value) in scene_entries(&text).map_err(|e| format!("{SCENE_FILE}: {e}"))? {
-        scene.set(&key, &value).map_err(|e| format!("{SCENE_FILE}:{line}: {e}"))?;
-    }
+    let mut scene = crate::bench::problem::read_scene(&project_root().join(SCENE_FILE))?;
     let t_rot = scene.law.t_rot;
     scene.solver.rtol = RTOL;
     scene.t_end = TAU_END * t_rot;

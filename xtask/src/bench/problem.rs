@@ -2,13 +2,14 @@
 //! grid, and what a solver returns on it (the file formats are described in [`super`]).
 
 use std::fs;
+use std::path::Path;
 
 use beam_body::model::{BeamBody, DaeSystem, Formulation, PhiPiece, TwoDofSystem};
 use beam_body::sim::{scene_entries, Scene};
 use beam_body::solver::OdeSystem;
 use nalgebra::{SVector, Vector4, Vector6};
 
-use crate::project_root;
+use crate::{project_root, relative};
 
 /// The output step of every solver: t_k = k·0.01 s, the last point exactly t_end.
 pub const DT_GRID: f64 = 0.01;
@@ -81,6 +82,20 @@ pub struct Outcome {
     pub counters: Counters,
 }
 
+/// A scene file (flat `key = value` TOML, as the CLI reads it) on top of the defaults; errors
+/// name the file and the line.
+pub fn read_scene(path: &Path) -> Result<Scene, String> {
+    let text =
+        fs::read_to_string(path).map_err(|err| format!("cannot read {}: {err}", relative(path)))?;
+    let mut scene = Scene::default();
+    for (line, key, value) in
+        scene_entries(&text).map_err(|e| format!("{}: {e}", relative(path)))?
+    {
+        scene.set(&key, &value).map_err(|err| format!("{}:{line}: {err}", relative(path)))?;
+    }
+    Ok(scene)
+}
+
 /// The problem of a scene of [`SCENES`], read from its scene file.
 pub fn problem(scene_name: &str) -> Result<Problem, String> {
     let (_, file, formulation) =
@@ -89,12 +104,7 @@ pub fn problem(scene_name: &str) -> Result<Problem, String> {
             format!("unknown scene `{scene_name}`: must be one of {}", names.join(", "))
         })?;
     let path = project_root().join("scenes").join(file);
-    let text = fs::read_to_string(&path)
-        .map_err(|err| format!("cannot read {}: {err}", path.display()))?;
-    let mut scene = Scene::default();
-    for (line, key, value) in scene_entries(&text)? {
-        scene.set(&key, &value).map_err(|err| format!("{}:{line}: {err}", path.display()))?;
-    }
+    let mut scene = read_scene(&path)?;
     scene.formulation = *formulation;
     scene.dt_out = DT_GRID;
     let n = (scene.t_end / DT_GRID).round() as usize;

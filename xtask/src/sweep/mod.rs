@@ -468,17 +468,16 @@ fn measure(case: &Case) -> Row {
             row.rejected = stats.rejected();
         }
         Err(e) => {
-            if let SimError::Solver(SolverError::OutOfRange { t, .. }) = e {
+            if let SimError::Solver(SolverError::OutOfRange { t, name, .. }) = e {
                 row.t_stop = t;
-            }
-            // A deflection out of range is physics if the reference, with the same check,
-            // leaves the range too. (The dae's drift is the formulation's own error.)
-            if matches!(e, SimError::Solver(SolverError::OutOfRange { name, .. }) if name != "drift")
-            {
-                match reference_solution(scene, &model, case.reference_rtol) {
-                    Err(RefError::OutOfRange { t, .. }) => row.t_ref_stop = t,
-                    Err(other) => row.message = format!("; reference: {other}"),
-                    Ok(_) => row.t_ref_stop = f64::INFINITY,
+                // A deflection out of range is physics if the reference, with the same check,
+                // leaves the range too. (The dae's drift is the formulation's own error.)
+                if name != "drift" {
+                    match reference_solution(scene, &model, case.reference_rtol) {
+                        Err(RefError::OutOfRange { t, .. }) => row.t_ref_stop = t,
+                        Err(other) => row.message = format!("; reference: {other}"),
+                        Ok(_) => row.t_ref_stop = f64::INFINITY,
+                    }
                 }
             }
             return stopped(case, e.to_string(), row);
