@@ -5,6 +5,7 @@
 //! - [`model`]: parameters, the four formulations, φ sources, hinge reactions. No I/O.
 //! - [`solver`]: our BDF integrator, generic over the system size. No I/O.
 //! - [`sim`]: the driver that runs a scene and samples it on an output grid.
+//! - [`math`]: sin, cos, exp, pow, ..., one implementation on every platform.
 //!
 //! The FMI 2.0 layer (`fmi2`, the only `unsafe` code) sits on top of these.
 //!
@@ -24,6 +25,7 @@
 //! ```
 
 pub mod fmi2;
+pub mod math;
 pub mod model;
 pub mod sim;
 pub mod solver;

@@ -14,6 +14,7 @@
 use super::kinematics::{pq, u1_accel_bias};
 use super::params::{ParamError, Params};
 use super::phi::Phi;
+use crate::math;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use std::f64::consts::PI;
 
@@ -60,7 +61,7 @@ impl Modes {
 
 /// sin θ, cos θ and θ̇ of the body, θ = ϑ1 + φ.
 fn body_angle(phi: &Phi, theta1: f64, dtheta1: f64) -> (f64, f64, f64) {
-    let (s, c) = (theta1 + phi.phi).sin_cos();
+    let (s, c) = math::sin_cos(theta1 + phi.phi);
     (s, c, dtheta1 + phi.dphi)
 }
 
@@ -148,7 +149,7 @@ impl BeamBody {
         qd: Vector2<f64>,
     ) -> (Matrix2<f64>, Vector2<f64>) {
         let Params { l, m2, j_c, r, g, .. } = self.params;
-        let (s0, c0) = phi.phi.sin_cos();
+        let (s0, c0) = math::sin_cos(phi.phi);
         let (w, ddphi) = (phi.dphi, phi.ddphi);
         let (v1, th, dth) = (q[0], q[1], qd[1]);
         let jc0 = Matrix2::new(0.0, -r * s0, 1.0, r * c0);

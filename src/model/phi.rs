@@ -1,6 +1,7 @@
 //! Sources of the prescribed hinge angle φ(t) and its first two derivatives.
 
 use super::params::{check, ParamError, FINITE, POSITIVE};
+use crate::math;
 use std::f64::consts::PI;
 
 /// φ, φ', φ'' at one instant [rad, rad/s, rad/s²].
@@ -215,7 +216,7 @@ impl PhiPiece {
         match *self {
             PhiPiece::Turn(law) => {
                 let w = PI / law.t_rot;
-                let (s, c) = (w * t).sin_cos();
+                let (s, c) = math::sin_cos(w * t);
                 Phi {
                     phi: law.phi0 + 0.5 * law.phi_end * (1.0 - c),
                     dphi: 0.5 * law.phi_end * w * s,
@@ -256,7 +257,7 @@ mod tests {
         }
         // φ = φ_end·sin²(πt/(2 t_rot)) exactly.
         let t = 0.37;
-        let want = PI * (PI * t / (2.0 * 0.85)).sin().powi(2);
+        let want = PI * math::sin(PI * t / (2.0 * 0.85)).powi(2);
         assert!((law.eval(t).phi - want).abs() < 1e-14);
     }
 
@@ -321,13 +322,13 @@ mod tests {
             let mut hist = ValueHistory::default();
             for k in 0..4 {
                 let t = 1.0 + k as f64 * h;
-                hist.push(t, t.sin());
+                hist.push(t, math::sin(t));
             }
             let t = 1.0 + 4.0 * h;
-            (PhiPiece::Taylor(hist.extrapolation(d).unwrap()).eval(t).ddphi + t.sin()).abs()
+            (PhiPiece::Taylor(hist.extrapolation(d).unwrap()).eval(t).ddphi + math::sin(t)).abs()
         };
         for d in [2, 3] {
-            let order = (err(d, 1e-2) / err(d, 5e-3)).log2();
+            let order = math::log2(err(d, 1e-2) / err(d, 5e-3));
             assert!((order - (d as f64 - 1.0)).abs() < 0.15, "degree {d}: order {order}");
         }
     }
@@ -354,7 +355,7 @@ mod tests {
 
     #[test]
     fn hermite_piece_is_c1_and_hits_the_extrapolated_target() {
-        let p = |t: f64| (2.0 * t).sin();
+        let p = |t: f64| math::sin(2.0 * t);
         let mut hist = ValueHistory::default();
         for t in [0.0, 0.1, 0.2, 0.3] {
             hist.push(t, p(t));

@@ -3,6 +3,7 @@
 //! imaginary axis (numerics-notes.md), in its simplest form.
 
 use super::{Bdf, BdfConfig, OdeSystem, SolverError, Stats};
+use crate::math;
 use nalgebra::{SMatrix, SVector};
 
 /// A slow motion and an undamped fast oscillator whose amplitude (1e-9) lies below the
@@ -22,7 +23,7 @@ pub struct SlowAndFast {
 impl OdeSystem<4> for SlowAndFast {
     fn rhs(&self, t: f64, y: &SVector<f64, 4>) -> SVector<f64, 4> {
         let (slow0, slow2) =
-            if self.slow_oscillates { (y[2], -y[0]) } else { (-0.5 * (y[0] - t.sin()), 0.0) };
+            if self.slow_oscillates { (y[2], -y[0]) } else { (-0.5 * (y[0] - math::sin(t)), 0.0) };
         SVector::<f64, 4>::new(slow0, y[3], slow2, -self.fast * self.fast * y[1])
     }
 
@@ -61,9 +62,9 @@ impl SlowAndFast {
     /// (sin t − 2 cos t + 2 e^(−t/2))/5.
     pub fn slow_exact(&self, t: f64) -> f64 {
         if self.slow_oscillates {
-            t.cos()
+            math::cos(t)
         } else {
-            (t.sin() - 2.0 * t.cos() + 2.0 * (-0.5 * t).exp()) / 5.0
+            (math::sin(t) - 2.0 * math::cos(t) + 2.0 * math::exp(-0.5 * t)) / 5.0
         }
     }
 
