@@ -12,7 +12,7 @@
 #![allow(non_snake_case, non_camel_case_types, non_upper_case_globals)]
 
 use super::instance::{Core, Instance, Logger, Status};
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Mutex;
@@ -59,12 +59,14 @@ pub struct fmi2CallbackFunctions {
 
 /// Addresses of the instances and FMU states this library handed out and has not freed.
 /// A pointer not in it (freed twice, foreign, garbage) is refused instead of dereferenced.
+/// B-trees rather than hash tables: no `RandomState`, so the library asks the operating system
+/// for no random numbers (Rust's std gets them from `ProcessPrng` on Windows, which wine 8 lacks).
 struct Registry {
-    instances: HashSet<usize>,
+    instances: BTreeSet<usize>,
     /// Each live FMU state, with the instance that made it. fmi2FreeInstance frees the
     /// states its instance leaves behind: it "frees all the allocated memory" of the
     /// instance (FMI 2.0 §2.1.5).
-    states: HashMap<usize, usize>,
+    states: BTreeMap<usize, usize>,
 }
 
 static REGISTRY: Mutex<Option<Registry>> = Mutex::new(None);
@@ -78,7 +80,7 @@ fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
     // sets stay consistent either way.
     let mut guard = REGISTRY.lock().unwrap_or_else(|e| e.into_inner());
     let registry =
-        guard.get_or_insert_with(|| Registry { instances: HashSet::new(), states: HashMap::new() });
+        guard.get_or_insert_with(|| Registry { instances: BTreeSet::new(), states: BTreeMap::new() });
     let out = f(registry);
     if registry.instances.is_empty() && registry.states.is_empty() {
         *guard = None;
