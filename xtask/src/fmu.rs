@@ -4,7 +4,7 @@
 //!    compared byte for byte).
 //! 2. Run the paper's scene (`scenes/paper.toml`) through the standalone solver: the
 //!    reference, `target/fmu/paper.csv`.
-//! 3. `cargo build --release --lib`: `target/release/libbeam_body.so`.
+//! 3. `cargo rustc --release --lib --crate-type cdylib`: `target/release/libbeam_body.so`.
 //! 4. Zip `target/fmu/BeamBody.fmu`:
 //!    ```text
 //!    modelDescription.xml
@@ -105,9 +105,11 @@ fn run_standalone(out_dir: &Path) -> Result<PathBuf> {
     Ok(csv)
 }
 
-/// `cargo build --release --lib`; returns the cdylib.
+/// `cargo rustc --release --lib --crate-type cdylib`; returns the cdylib. The crate type is
+/// given here, not in Cargo.toml, so that the cdylib is the unit's only crate type and gets
+/// the release profile's LTO.
 fn build_library() -> Result<PathBuf> {
-    run_cmd(&mut cargo(["build", "--release", "--lib"]))?;
+    run_cmd(&mut cargo(["rustc", "--release", "--lib", "--crate-type", "cdylib"]))?;
     let so = target_dir().join("release").join("libbeam_body.so");
     if !so.is_file() {
         return Err(format!("the build did not produce {}", relative(&so)).into());
