@@ -9,10 +9,10 @@
 //! same bits from the same inputs.
 //!
 //! Square roots, `abs`, `floor` and the arithmetic operators are exactly rounded by IEEE 754
-//! and need no wrapper; `powi` with a constant exponent is expanded into multiplications by
-//! the compiler, and otherwise computed by compiler-builtins' `__powidf2`, the same square-and-
-//! multiply loop on every target. `clippy.toml` refuses the `f64` methods that would bypass
-//! this module.
+//! and need no wrapper. Integer powers do: `f64::powi` with an exponent known only at run time
+//! becomes a call to `__powidf2` on Linux and macOS but to the C library's `pow` on Windows
+//! (LLVM lowers it so for the Windows targets), so [`powi`] multiplies out itself. `clippy.toml`
+//! refuses the `f64` methods that would bypass this module.
 #![forbid(unsafe_code)]
 
 /// sin x.
@@ -57,6 +57,31 @@ pub fn pow(x: f64, y: f64) -> f64 {
     libm::pow(x, y)
 }
 
+/// xⁿ by binary powering: the multiplications, in the order, of compiler-rt's `__powidf2`
+/// (and of LLVM's expansion of a constant exponent), so the bits are those `f64::powi` gives
+/// on Linux, on every target.
+#[inline]
+pub fn powi(x: f64, n: i32) -> f64 {
+    let mut base = x;
+    let mut bits = n.unsigned_abs();
+    let mut product = 1.0;
+    loop {
+        if bits & 1 == 1 {
+            product *= base;
+        }
+        bits >>= 1;
+        if bits == 0 {
+            break;
+        }
+        base *= base;
+    }
+    if n < 0 {
+        1.0 / product
+    } else {
+        product
+    }
+}
+
 /// The angle of the point (x, y) from the positive x axis, in (−π, π].
 #[inline]
 pub fn atan2(y: f64, x: f64) -> f64 {
@@ -93,8 +118,31 @@ mod tests {
         assert_eq!(pow(9.0, 0.5), 3.0);
         assert!((atan2(1.0, 1.0) - FRAC_PI_4).abs() <= f64::EPSILON);
         assert!((atan2(1.0, -1.0) - 3.0 * FRAC_PI_4).abs() <= 2.0 * f64::EPSILON);
+        assert_eq!(powi(3.0, 0), 1.0);
+        assert_eq!(powi(3.0, 5), 243.0);
+        assert_eq!(powi(2.0, -3), 0.125);
+        assert_eq!(powi(-1.5, 3), -3.375);
         assert_eq!(hypot(3.0, 4.0), 5.0);
         assert_eq!(hypot(3e300, 4e300), 5e300);
+    }
+
+    /// The same bits as `f64::powi` where that is compiler-rt's `__powidf2` (a run-time
+    /// exponent) or LLVM's expansion (a constant one), on awkward bases.
+    #[test]
+    #[cfg(not(windows))]
+    #[allow(clippy::disallowed_methods)]
+    fn powi_has_the_bits_of_std_powi_off_windows() {
+        let exponents: Vec<i32> = (-9..=9).chain([17, 31, 64, -40]).collect();
+        for k in 1..500 {
+            let x = 1.0 + k as f64 * 0.0123456789;
+            for &n in &exponents {
+                let n = std::hint::black_box(n);
+                assert_eq!(powi(x, n).to_bits(), x.powi(n).to_bits(), "{x}^{n}");
+            }
+            assert_eq!(powi(x, 2).to_bits(), x.powi(2).to_bits());
+            assert_eq!(powi(x, 3).to_bits(), x.powi(3).to_bits());
+            assert_eq!(powi(x, 5).to_bits(), x.powi(5).to_bits());
+        }
     }
 
     /// libm agrees with glibc, which is correctly rounded in practice, to within two ulps:

@@ -19,7 +19,7 @@ use std::ptr::{null, null_mut};
 /// The paper's law φ = π sin²(πt / (2·0.85)) for t < 0.85, then π.
 fn paper_phi(t: f64) -> f64 {
     if t < 0.85 {
-        PI * beam_body::math::sin(PI * t / (2.0 * 0.85)).powi(2)
+        PI * beam_body::math::powi(beam_body::math::sin(PI * t / (2.0 * 0.85)), 2)
     } else {
         PI
     }

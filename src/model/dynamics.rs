@@ -74,10 +74,10 @@ impl BeamBody {
             13.0 * m * l / 35.0,
             -11.0 * m * l * l / 210.0,
             -11.0 * m * l * l / 210.0,
-            m * l.powi(3) / 105.0,
+            m * math::powi(l, 3) / 105.0,
         );
         let k = Matrix2::new(
-            12.0 * ei / l.powi(3),
+            12.0 * ei / math::powi(l, 3),
             -6.0 * ei / (l * l),
             -6.0 * ei / (l * l),
             4.0 * ei / l,

@@ -26,6 +26,7 @@ pub fn u1_accel_bias(l: f64, dv1: f64, dtheta1: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math;
 
     #[test]
     fn u1_is_the_integral_of_the_slope_squared() {
@@ -46,7 +47,7 @@ mod tests {
             } else {
                 2.0
             };
-            s += w * slope(i as f64 * h).powi(2);
+            s += w * math::powi(slope(i as f64 * h), 2);
         }
         let integral = -0.5 * s * h / 3.0;
         assert!((u1(l, v1, th) - integral).abs() < 1e-12);

@@ -936,7 +936,8 @@ impl<const N: usize> Bdf<N> {
                 // Only a growth by ETA_THRESHOLD or more changes the step. Below
                 // (BIAS_SAME·dsm > (1/ETA_THRESHOLD − ADDON)^(q+1)) the ratio need not be
                 // computed: this saves a powf in most steps.
-                let grows = BIAS_SAME * dsm <= (1.0 / ETA_THRESHOLD - ADDON).powi(q as i32 + 1);
+                let grows =
+                    BIAS_SAME * dsm <= math::powi(1.0 / ETA_THRESHOLD - ADDON, q as i32 + 1);
                 eta = if grows { step_ratio(BIAS_SAME, dsm, q + 1) } else { 1.0 };
             } else {
                 // The candidates compared by log((bias·err)^(1/k)), the smallest giving the
@@ -953,7 +954,7 @@ impl<const N: usize> Bdf<N> {
                 let qmax = self.cfg.max_order;
                 let log_up = if q != qmax && self.saved_tq5 != 0.0 {
                     let ratio = (self.coeffs.tq[5] / self.saved_tq5)
-                        * (self.h / self.tau[2]).powi(q as i32 + 1);
+                        * math::powi(self.h / self.tau[2], q as i32 + 1);
                     let diff = self.acor - self.zn[qmax] * ratio;
                     let dup = self.wrms(&diff) * self.coeffs.tq[3];
                     log_root(BIAS_UP, dup, q + 2)

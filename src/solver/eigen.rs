@@ -254,6 +254,7 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math;
     use nalgebra::{DMatrix, SMatrix};
 
     /// Sorted (re, im) of nalgebra's Schur form, the reference.
@@ -274,7 +275,7 @@ mod tests {
 
     fn assert_close(a: &[(f64, f64)], b: &[(f64, f64)], scale: f64) {
         for (x, y) in a.iter().zip(b) {
-            let d = ((x.0 - y.0).powi(2) + (x.1 - y.1).powi(2)).sqrt();
+            let d = (math::powi(x.0 - y.0, 2) + math::powi(x.1 - y.1, 2)).sqrt();
             assert!(d <= 1e-9 * scale, "{a:?} vs {b:?}");
         }
     }
@@ -313,7 +314,7 @@ mod tests {
         // J = [[0, I], [A, B]] as the model's Jacobians are, over stiffness scales up to 1e7.
         let mut r = rng(9);
         for k in 0..300 {
-            let stiff = 10f64.powi(k % 8);
+            let stiff = math::powi(10f64, k % 8);
             let (a, b): (Vec<f64>, Vec<f64>) = (
                 (0..4).map(|_| -stiff * (1.5 + r())).collect(),
                 (0..4).map(|_| 0.01 * r()).collect(),

@@ -46,9 +46,9 @@ pub fn drift_per_period(q: usize, y: f64) -> f64 {
     use std::f64::consts::PI;
     match q {
         1 => PI * y,
-        2 | 3 => 0.5 * PI * y.powi(3),
-        4 => 2.0 * PI / 3.0 * y.powi(5),
-        _ => PI / 3.0 * y.powi(5),
+        2 | 3 => 0.5 * PI * math::powi(y, 3),
+        4 => 2.0 * PI / 3.0 * math::powi(y, 5),
+        _ => PI / 3.0 * math::powi(y, 5),
     }
 }
 
@@ -237,7 +237,10 @@ mod tests {
         let mut roots: Vec<C> = (0..q)
             .map(|k| {
                 let a = 0.4 + 0.9 * k as f64;
-                (0.9_f64.powi(k as i32) * math::cos(a), 0.9_f64.powi(k as i32) * math::sin(a))
+                (
+                    math::powi(0.9_f64, k as i32) * math::cos(a),
+                    math::powi(0.9_f64, k as i32) * math::sin(a),
+                )
             })
             .collect();
         for _ in 0..500 {

@@ -80,7 +80,7 @@ impl SlowAndFast {
             s.step(self, t_end)?;
             s.check_state()?;
             let y = s.y();
-            amp = amp.max((y[1] * y[1] + (y[3] / self.fast).powi(2)).sqrt());
+            amp = amp.max((y[1] * y[1] + math::powi(y[3] / self.fast, 2)).sqrt());
         }
         Ok(SlowAndFastRun {
             fast_amplitude: amp,
