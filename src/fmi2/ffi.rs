@@ -79,8 +79,8 @@ fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
     // No code panics while holding the lock, so poisoning can only come from outside; the
     // sets stay consistent either way.
     let mut guard = REGISTRY.lock().unwrap_or_else(|e| e.into_inner());
-    let registry =
-        guard.get_or_insert_with(|| Registry { instances: BTreeSet::new(), states: BTreeMap::new() });
+    let registry = guard
+        .get_or_insert_with(|| Registry { instances: BTreeSet::new(), states: BTreeMap::new() });
     let out = f(registry);
     if registry.instances.is_empty() && registry.states.is_empty() {
         *guard = None;
