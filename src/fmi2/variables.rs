@@ -18,6 +18,10 @@ with a heavy rigid body hinged at its tip and turned through a large angle phi(t
 Russkikh & Shklyarchuk (2020). The paper's three formulations: constraints exact (eq. 15), DAE \
 with the inextensibility constraint (eq. 20-21), linearised (eq. 16); and the DAE projected onto \
 the constraint.";
+/// `version`: the crate's version (Cargo.toml). Not part of the GUID, which names the
+/// interface: a release that changes no variable keeps it.
+pub const MODEL_VERSION: &str = env!("CARGO_PKG_VERSION");
+/// `generationTool`; like every attribute, the same on every build (no date, no path).
 pub const GENERATION_TOOL: &str = concat!("beam-body ", env!("CARGO_PKG_VERSION"));
 
 /// `<DefaultExperiment>`: the paper's scene (12 turn periods T = 0.85 s, its output step).

@@ -213,6 +213,7 @@ pub fn generate() -> Result<String> {
             ("modelName", vars::MODEL_NAME.into()),
             ("guid", vars::guid().into()),
             ("description", vars::MODEL_DESCRIPTION.into()),
+            ("version", vars::MODEL_VERSION.into()),
             ("generationTool", vars::GENERATION_TOOL.into()),
             ("variableNamingConvention", "flat".into()),
             ("numberOfEventIndicators", "0".into()),
@@ -446,6 +447,7 @@ mod tests {
                 "modelName",
                 "guid",
                 "description",
+                "version",
                 "generationTool",
                 "variableNamingConvention",
                 "numberOfEventIndicators",
@@ -455,6 +457,11 @@ mod tests {
         assert_eq!(a["modelName"], vars::MODEL_NAME);
         assert_eq!(a["guid"], vars::guid());
         assert_eq!(a["description"], vars::MODEL_DESCRIPTION);
+        // The library's version, as Cargo.toml's [package] section gives it.
+        let manifest = std::fs::read_to_string(crate::project_root().join("Cargo.toml")).unwrap();
+        let package = &manifest[manifest.find("[package]").unwrap()..];
+        let line = package.lines().find(|l| l.starts_with("version = ")).unwrap();
+        assert_eq!(format!("version = \"{}\"", a["version"]), line);
         assert_eq!(a["generationTool"], vars::GENERATION_TOOL);
         assert_eq!(a["variableNamingConvention"], "flat");
         assert_eq!(a["numberOfEventIndicators"], "0");
