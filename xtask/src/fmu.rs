@@ -1,21 +1,25 @@
-//! `cargo xtask fmu`: build, package and run the FMU.
+//! `cargo xtask fmu [--all-platforms]`: build, package and run the FMU.
 //!
 //! 1. Refuse a stale `modelDescription/modelDescription.xml` (regenerated in memory and
 //!    compared byte for byte).
 //! 2. Run the paper's scene (`scenes/paper.toml`) through the standalone solver: the
 //!    reference, `target/fmu/paper.csv`.
-//! 3. `cargo rustc --release --lib --crate-type cdylib`: `target/release/libbeam_body.so`.
+//! 3. Build the library as a cdylib for this machine, and with `--all-platforms` for every
+//!    platform ([`platforms`]).
 //! 4. Zip `target/fmu/BeamBody.fmu`:
 //!    ```text
 //!    modelDescription.xml
-//!    binaries/linux64/BeamBody.so      (a copy of libbeam_body.so)
+//!    binaries/linux64/BeamBody.so      (this machine's build; with --all-platforms also
+//!                                       win64, darwin64, aarch64-darwin and aarch64-linux)
 //!    documentation/index.html          (generated from the interface tables)
 //!    ```
-//!    When the test venv (`target/venv`) exists, FMPy's `validate_fmu` must find no problem.
-//! 5. Extract it to `target/fmu/BeamBody/`, load the packaged .so there with the native host
-//!    ([`crate::host`]), run the same scene through the FMI 2.0 API with the built-in law and
-//!    the DefaultExperiment (`target/fmu/paper_fmu.csv`), check that a serialized FMU state
-//!    restores to a bit-identical continuation, and compare with the standalone solver.
+//!    and, with `--all-platforms`, `target/fmu/BeamBody-aarch64-linux.fmu`. When the test
+//!    venv (`target/venv`) exists, FMPy's `validate_fmu` must find no problem in either.
+//! 5. Extract it to `target/fmu/BeamBody/`, load this machine's library there with the
+//!    native host ([`crate::host`]), run the same scene through the FMI 2.0 API with the
+//!    built-in law and the DefaultExperiment (`target/fmu/paper_fmu.csv`), check that a
+//!    serialized FMU state restores to a bit-identical continuation, and compare with the
+//!    standalone solver.
 
 use std::fs;
 use std::io::Write as _;
@@ -28,29 +32,56 @@ use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipArchive, ZipWriter};
 
 use crate::host::{Fmu2, Status};
+use crate::platforms::{self, Archive};
 use crate::summary::{sig, Table};
 use crate::{
-    build_release_binary, cargo, docs, model_description, project_root, relative, run_cmd, summary,
+    build_release_binary, docs, model_description, project_root, relative, run_cmd, summary,
     target_dir, Result,
 };
 
 /// The outputs that the host records and compares, in CSV column order after `t`.
 const RECORDED: [Var; 3] = [Var::V1, Var::Theta1, Var::U2];
 
-/// Checks the modelDescription, builds the cdylib and zips `target/fmu/BeamBody.fmu`.
-/// Returns the .fmu and the library it packaged.
-pub fn build_package() -> Result<(PathBuf, PathBuf)> {
+/// The archives that [`build_package`] wrote.
+pub struct Packages {
+    /// `target/fmu/BeamBody.fmu`.
+    pub main: PathBuf,
+    /// `target/fmu/BeamBody-aarch64-linux.fmu`, with `--all-platforms`.
+    pub aarch64_linux: Option<PathBuf>,
+    /// Each archive, with its binaries: (folder, size in bytes).
+    listing: Vec<(PathBuf, Vec<(&'static str, u64)>)>,
+}
+
+/// Checks the modelDescription, builds the cdylib (with `all`, for every platform) and zips
+/// the archives of [`platforms::ARCHIVES`] (without `all`: [`platforms::HOST_ARCHIVE`]).
+pub fn build_package(all: bool) -> Result<Packages> {
     model_description::check_fresh()?;
     let out_dir = target_dir().join("fmu");
     fs::create_dir_all(&out_dir)
         .map_err(|err| format!("cannot create {}: {err}", relative(&out_dir)))?;
-    let library = build_library()?;
-    let fmu = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu"));
-    package(&library, &fmu)?;
-    Ok((fmu, library))
+    let built = platforms::build(all)?;
+    let archives: &[Archive] =
+        if all { &platforms::ARCHIVES } else { std::slice::from_ref(&platforms::HOST_ARCHIVE) };
+    let mut listing = Vec::new();
+    for archive in archives {
+        let fmu = out_dir.join(archive.file);
+        let mut binaries = Vec::new();
+        for &(folder, source) in archive.binaries {
+            binaries.push((folder, built.path(source)?));
+        }
+        package(&binaries, &fmu)?;
+        let sizes = binaries
+            .iter()
+            .map(|(folder, path)| (*folder, fs::metadata(path).map(|m| m.len()).unwrap_or(0)))
+            .collect();
+        listing.push((fmu, sizes));
+    }
+    let main = listing[0].0.clone();
+    let aarch64_linux = listing.get(1).map(|(fmu, _)| fmu.clone());
+    Ok(Packages { main, aarch64_linux, listing })
 }
 
-pub fn run() -> Result {
+pub fn run(all: bool) -> Result {
     model_description::check_fresh()?;
     let out_dir = target_dir().join("fmu");
     fs::create_dir_all(&out_dir)
@@ -58,19 +89,20 @@ pub fn run() -> Result {
 
     let reference_csv = run_standalone(&out_dir)?;
 
-    let (fmu, library) = build_package()?;
-    let so_size = fs::metadata(&library)
-        .map_err(|err| format!("cannot stat {}: {err}", relative(&library)))?
-        .len();
-    let fmu_size = fs::metadata(&fmu).map(|m| m.len()).unwrap_or(0);
-    println!("\n{}:", relative(&fmu));
-    println!("  binaries/linux64/{MODEL_IDENTIFIER}.so  {} ({so_size} bytes)", mib(so_size));
-    println!("  {}  {} (zipped)", relative(&fmu), mib(fmu_size));
-
-    validate_with_fmpy(&fmu)?;
+    let packages = build_package(all)?;
+    for (fmu, binaries) in &packages.listing {
+        println!("\n{}:", relative(fmu));
+        for (folder, size) in binaries {
+            let name = format!("binaries/{folder}/{}", platforms::library_name(folder));
+            println!("  {name:<37} {} ({size} bytes)", mib(*size));
+        }
+        let fmu_size = fs::metadata(fmu).map(|m| m.len()).unwrap_or(0);
+        println!("  {:<37} {} (zipped)", relative(fmu), mib(fmu_size));
+        validate_with_fmpy(fmu)?;
+    }
 
     let dir = out_dir.join(MODEL_IDENTIFIER);
-    extract(&fmu, &dir)?;
+    extract(&packages.main, &dir)?;
     let run = run_fmu(&dir)?;
     let fmu_csv = out_dir.join("paper_fmu.csv");
     write_csv(&fmu_csv, &run.rows)?;
@@ -105,25 +137,18 @@ fn run_standalone(out_dir: &Path) -> Result<PathBuf> {
     Ok(csv)
 }
 
-/// `cargo rustc --release --lib --crate-type cdylib`; returns the cdylib. The crate type is
-/// given here, not in Cargo.toml, so that the cdylib is the unit's only crate type and gets
-/// the release profile's LTO.
-fn build_library() -> Result<PathBuf> {
-    run_cmd(&mut cargo(["rustc", "--release", "--lib", "--crate-type", "cdylib"]))?;
-    let so = target_dir().join("release").join("libbeam_body.so");
-    if !so.is_file() {
-        return Err(format!("the build did not produce {}", relative(&so)).into());
-    }
-    Ok(so)
-}
-
-/// Writes the .fmu. Entries carry no timestamps (the zip crate's default date, 1980-01-01),
-/// so the same inputs give the same archive.
-fn package(library: &Path, fmu: &Path) -> Result {
+/// Writes the .fmu with `binaries` (folder under binaries/, library). Entries carry no
+/// timestamps (the zip crate's default date, 1980-01-01), so the same inputs give the same
+/// archive.
+fn package(binaries: &[(&str, &Path)], fmu: &Path) -> Result {
     let model_description = fs::read(model_description::path())
         .map_err(|err| format!("cannot read {}: {err}", model_description::RELATIVE_PATH))?;
-    let binary =
-        fs::read(library).map_err(|err| format!("cannot read {}: {err}", relative(library)))?;
+    let mut libraries = Vec::new();
+    for (folder, path) in binaries {
+        let bytes =
+            fs::read(path).map_err(|err| format!("cannot read {}: {err}", relative(path)))?;
+        libraries.push((format!("binaries/{folder}/{}", platforms::library_name(folder)), bytes));
+    }
     let documentation = docs::index_html();
 
     let file =
@@ -131,20 +156,20 @@ fn package(library: &Path, fmu: &Path) -> Result {
     let mut zip = ZipWriter::new(file);
     let deflated = SimpleFileOptions::default().compression_method(CompressionMethod::Deflated);
     let files = deflated.unix_permissions(0o644);
-    let directories = deflated.unix_permissions(0o755);
-    let entries: [(&str, &[u8], SimpleFileOptions); 3] = [
-        ("modelDescription.xml", &model_description, files),
-        (&format!("binaries/{}/{MODEL_IDENTIFIER}.so", Fmu2::PLATFORM), &binary, directories),
-        ("documentation/index.html", documentation.as_bytes(), files),
-    ];
+    let executables = deflated.unix_permissions(0o755);
     let write_all = |zip: &mut ZipWriter<fs::File>| -> zip::result::ZipResult<()> {
-        zip.add_directory("binaries/", directories)?;
-        zip.add_directory(format!("binaries/{}/", Fmu2::PLATFORM), directories)?;
-        zip.add_directory("documentation/", directories)?;
-        for (name, bytes, options) in &entries {
-            zip.start_file(*name, *options)?;
+        zip.start_file("modelDescription.xml", files)?;
+        zip.write_all(&model_description)?;
+        zip.add_directory("binaries/", executables)?;
+        for (name, bytes) in &libraries {
+            let folder = &name[..name.rfind('/').unwrap_or(0) + 1];
+            zip.add_directory(folder, executables)?;
+            zip.start_file(name.as_str(), executables)?;
             zip.write_all(bytes)?;
         }
+        zip.add_directory("documentation/", executables)?;
+        zip.start_file("documentation/index.html", files)?;
+        zip.write_all(documentation.as_bytes())?;
         Ok(())
     };
     write_all(&mut zip).map_err(|err| format!("cannot write {}: {err}", relative(fmu)))?;
@@ -342,7 +367,8 @@ fn write_csv(path: &Path, rows: &[[f64; 4]]) -> Result {
 }
 
 fn print_fmu_run(run: &FmuRun, dir: &Path, csv: &Path) {
-    let so = dir.join("binaries").join(Fmu2::PLATFORM).join(format!("{MODEL_IDENTIFIER}.so"));
+    let folder = platforms::HOST_FOLDER;
+    let so = dir.join("binaries").join(folder).join(platforms::library_name(folder));
     println!("\n{} (native FMI 2.0 host, {}):", relative(csv), relative(&so));
     println!("  fmi2GetVersion {}, fmi2GetTypesPlatform {}", run.version, run.types_platform);
     let ex = DEFAULT_EXPERIMENT;

@@ -15,10 +15,12 @@ mod fmu;
 mod fuzz;
 mod host;
 mod model_description;
+mod platforms;
 mod progress;
 mod python;
 mod summary;
 mod sweep;
+mod system;
 mod test;
 mod xml;
 
@@ -39,12 +41,19 @@ Commands:
           build the release binary, run the Rust tests and the Python tests.
   gen     Write modelDescription/modelDescription.xml from the interface tables
           (src/fmi2/variables.rs). Commit the result; a test fails when it is stale.
-  fmu     Build and check the FMU, target/fmu/BeamBody.fmu:
+  fmu [--all-platforms]
+          Build and check the FMU, target/fmu/BeamBody.fmu:
           - refuse a stale modelDescription.xml;
           - run the paper's scene (scenes/paper.toml) through the standalone solver,
             the reference (target/fmu/paper.csv);
-          - build the library (cargo build --release --lib) and zip modelDescription.xml,
-            binaries/linux64/BeamBody.so and documentation/index.html;
+          - build the library (cargo rustc --release --lib --crate-type cdylib) and zip
+            modelDescription.xml, binaries/linux64/BeamBody.so and
+            documentation/index.html;
+          - --all-platforms: also cross-build win64, macOS (x86_64 and arm64) and Linux
+            aarch64 with Debian's Rust (installing the toolchains with apt-get as root),
+            into BeamBody.fmu (binaries/win64, darwin64 universal, aarch64-darwin,
+            aarch64-linux) and target/fmu/BeamBody-aarch64-linux.fmu (the aarch64
+            library in binaries/linux64, where FMPy looks on Linux aarch64);
           - validate it with FMPy when target/venv exists;
           - extract it to target/fmu/BeamBody/, load the .so there with a native FMI 2.0
             host, run the same scene through it (target/fmu/paper_fmu.csv) and compare.
@@ -121,10 +130,14 @@ fn run(args: &[String]) -> Result {
             no_options(command, options)?;
             model_description::run()
         }
-        "fmu" => {
-            no_options(command, options)?;
-            fmu::run()
-        }
+        "fmu" => match options {
+            [] => fmu::run(false),
+            [option] if option == "--all-platforms" => fmu::run(true),
+            [option, ..] => Err(format!(
+                "`fmu` has no option `{option}` (only --all-platforms); run `cargo xtask help`"
+            )
+            .into()),
+        },
         "bench" => bench::run(Mode::parse(command, options)?),
         "bench-run" => bench::run_round(bench::parse_round(options)?),
         "sweep" => sweep::run(options),

@@ -4,6 +4,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::fmu::Packages;
 use crate::{build_release_binary, cargo, project_root, python, run_cmd, status_of, Result};
 
 /// Which half of the suite to run.
@@ -35,12 +36,13 @@ pub fn run(scope: Scope) -> Result {
         report.step("rust tests", rust_tests);
         return report.finish();
     }
-    report.step("system tools", system_tools);
+    report.step("system packages", system_packages);
     let python = report.step("python venv", python::ensure_venv);
     let binary = report.step("build beam-body (release)", build_release_binary);
-    let fmu = report.step("package BeamBody.fmu", || crate::fmu::build_package().map(|p| p.0));
+    let fmu = report.step("package the FMUs (all platforms)", || crate::fmu::build_package(true));
     if scope == Scope::All {
         report.step("rust tests", rust_tests);
+        report.step("rust tests (aarch64, qemu)", crate::platforms::test_linux_aarch64);
         // The sweep's representative subset: every row must end as expected (ok within its
         // error bound, or stopped with the expected message).
         report.step("sweep --quick", || crate::sweep::run(&["--quick".to_string()]));
@@ -56,39 +58,10 @@ pub fn run(scope: Scope) -> Result {
     report.finish()
 }
 
-/// The system programs the suite needs beyond Rust and Python, with the Debian package that
-/// provides each: a C compiler for the C host fixture, a C++ compiler for libFuzzer, and
-/// valgrind for the C host's memcheck runs.
-const SYSTEM_TOOLS: [(&str, &str); 3] = [("cc", "gcc"), ("g++", "g++"), ("valgrind", "valgrind")];
-
-/// Installs the missing [`SYSTEM_TOOLS`] with apt-get when running as root on Debian;
-/// otherwise names them and how to install them.
-fn system_tools() -> Result {
-    let present = |tool: &str| {
-        Command::new(tool)
-            .arg("--version")
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    let missing: Vec<&str> =
-        SYSTEM_TOOLS.iter().filter(|(tool, _)| !present(tool)).map(|(_, pkg)| *pkg).collect();
-    if missing.is_empty() {
-        eprintln!("cc, g++ and valgrind are installed");
-        return Ok(());
-    }
-    let root = Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.trim_ascii() == b"0");
-    if !(root && present("apt-get")) {
-        return Err(format!(
-            "missing system packages: {} (Debian: apt-get install {})",
-            missing.join(", "),
-            missing.join(" ")
-        )
-        .into());
-    }
-    run_cmd(Command::new("apt-get").args(["update", "-qq"]))?;
-    run_cmd(Command::new("apt-get").args(["install", "-y", "-qq"]).args(&missing))
+/// Installs the system packages the suite needs (apt-get as root on Debian), or names them.
+fn system_packages() -> Result {
+    use crate::system::{ensure, CROSS_TOOLCHAINS, FOREIGN_RUNNERS, TEST_TOOLS};
+    ensure("cargo xtask test", &[TEST_TOOLS, CROSS_TOOLCHAINS, FOREIGN_RUNNERS])
 }
 
 fn rust_tests() -> Result {
@@ -110,13 +83,14 @@ fn nextest_available() -> bool {
         .is_ok_and(|status| status.success())
 }
 
-fn pytest(python: &Path, binary: &Path, fmu: &Path) -> Result {
+fn pytest(python: &Path, binary: &Path, fmu: &Packages) -> Result {
     let root = project_root();
     let mut cmd = Command::new(python);
     cmd.args(["-m", "pytest", "tests/python", "-q", "-ra"])
         .env("BEAM_BODY_BIN", binary)
-        .env("BEAM_BODY_FMU", fmu)
+        .env("BEAM_BODY_FMU", &fmu.main)
         .env("BEAM_BODY_ROOT", &root)
+        .envs(fmu.aarch64_linux.iter().map(|p| ("BEAM_BODY_FMU_AARCH64_LINUX", p)))
         .current_dir(&root);
     let status = status_of(&mut cmd)?;
     match status.code() {

@@ -33,7 +33,7 @@ pub fn prepare() -> Result<PathBuf> {
 
 /// Builds and packages the FMU and extracts it to a clean `dir`.
 pub fn prepare_at(dir: PathBuf) -> Result<PathBuf> {
-    let (fmu, _library) = crate::fmu::build_package()?;
+    let fmu = crate::fmu::build_package(false)?.main;
     if dir.exists() {
         fs::remove_dir_all(&dir)
             .map_err(|err| format!("cannot remove {}: {err}", relative(&dir)))?;
