@@ -1,35 +1,71 @@
 /*
  * A minimal FMI 2.0 co-simulation host for the BeamBody FMU, used as a test fixture by
  * tests/python/test_c_host.py (which compiles it with the system's cc and runs it natively and
- * under valgrind). It loads binaries/linux64/BeamBody.so of an unzipped FMU with dlopen/dlsym,
- * as a real host would, and runs three checks:
+ * under valgrind) and tests/python/test_c_host_platforms.py (which cross-compiles it for Windows
+ * with mingw-w64 and for Linux aarch64, and runs it under wine and qemu-aarch64). It loads the
+ * unzipped FMU's library for the platform it was compiled for (binaries/win64/BeamBody.dll,
+ * binaries/aarch64-linux/BeamBody.so, binaries/darwin64/BeamBody.dylib, else
+ * binaries/linux64/BeamBody.so) with dlopen/dlsym or LoadLibraryA/GetProcAddress, as a real host
+ * would, and runs three checks:
  *
  *   1. scene:   the paper's scene (default parameters, phi_source = law, t = 0 .. 10.2 s,
  *               communication step 0.01 s, tolerance undefined = the FMU's default) recording
  *               v1, theta1, u2 at every communication point; all must be finite. A summary goes
- *               to stdout and, with -o, the whole trajectory as CSV (%.17g: round-trips exactly).
+ *               to stdout and, with -o, the whole trajectory as CSV: t, v1, theta1, u2 as %.17g
+ *               (round-trips exactly), then the IEEE-754 bits of v1, theta1, u2 as 16 hex digits
+ *               (exact whatever the C library's printf does), one row per communication point.
  *   2. cycles:  N fmi2Instantiate/fmi2FreeInstance cycles, most also doing a part of the life
  *               cycle (set-up, a few steps, FMU states and their serialization, reset, calls
  *               out of sequence, rejected instantiations), every status checked.
  *   3. threads: K instances (each with its own phi_end and EI) created, stepped over the paper's
- *               scene and freed in K concurrent pthreads; the trajectories must be bit-identical
+ *               scene and freed in K concurrent threads; the trajectories must be bit-identical
  *               to the same K configurations run one after another in the main thread.
  *
- * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB.so]
+ * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB]
+ *                     [--save-state S STATE.bin] [--resume STATE.bin]
  *                     [--no-dlclose | --reloads R]
  * --so loads another build of the library (with the unzipped FMU's modelDescription.xml);
+ * --cycles 0 and --threads 0 skip checks 2 and 3.
+ * --save-state S FILE: in the scene (check 1), after communication step S (t = S*h, once its
+ * outputs are recorded) the state is taken with fmi2GetFMUstate, written to FILE as the raw bytes
+ * of fmi2SerializeFMUstate, and freed; the scene then continues (its trajectory is unchanged).
+ * --resume FILE: the scene instantiates and initializes as usual, then restores the state of
+ * FILE (fmi2DeSerializeFMUstate, fmi2SetFMUstate); its step S comes from fmi2LastSuccessfulTime
+ * (which must be a communication point), and the scene continues from step S to the end, so -o
+ * then writes the points S .. 1020 only. Both options only change check 1; they compose with
+ * each other and with checks 2 and 3.
  * --no-dlclose keeps the library loaded at exit; --reloads R then loads, uses (one plain and one
  * FMU-state cycle) and unloads it R more times.
  * Exit code: 0 when every check passed, 1 on a failure (with a message on stderr), 2 on bad usage.
  *
+ * What differs between POSIX and Windows (loading the library and its error text, threads and
+ * their start gate, the monotonic clock) is in the platform shim below; the rest is plain C11.
  * The FMI 2.0 types are written here from the standard's headers (fmi2TypesPlatform.h,
- * fmi2FunctionTypes.h) so that the fixture needs nothing beyond libc, pthread and dlfcn.
+ * fmi2FunctionTypes.h) so that the fixture needs nothing beyond the C library, the system's
+ * thread and loader API (pthread and dlfcn, or kernel32) and libm.
  */
-#define _POSIX_C_SOURCE 200809L
 
+/* ----- platform shim ------------------------------------------------------------------------ */
+
+/* Feature macros come before any system header. */
+#ifdef _WIN32
+/* mingw-w64's own C99 printf (%zu, %lld, %a, correctly rounded %.17g) instead of msvcrt's */
+#define __USE_MINGW_ANSI_STDIO 1
+#define WIN32_LEAN_AND_MEAN
+#ifndef _WIN32_WINNT
+#define _WIN32_WINNT 0x0601 /* Windows 7: condition variables */
+#endif
+#include <windows.h>
+#else
+#ifdef __APPLE__
+#define _DARWIN_C_SOURCE /* RTLD_NOLOAD */
+#endif
+#define _POSIX_C_SOURCE 200809L
 #include <dlfcn.h>
-#include <math.h>
 #include <pthread.h>
+#endif
+
+#include <math.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stddef.h>
@@ -38,6 +74,199 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+
+/* The FMU's library in an unzipped FMU, by the platform this host is compiled for (the FMI
+ * 2.0.4 platform tuples; aarch64-linux is the form 2.0.4 allows for platforms beyond the
+ * original five). */
+#if defined(_WIN64)
+#define LIB_DEFAULT "binaries/win64/BeamBody.dll"
+#elif defined(_WIN32)
+#define LIB_DEFAULT "binaries/win32/BeamBody.dll"
+#elif defined(__APPLE__)
+#define LIB_DEFAULT "binaries/darwin64/BeamBody.dylib"
+#elif defined(__linux__) && defined(__aarch64__)
+#define LIB_DEFAULT "binaries/aarch64-linux/BeamBody.so"
+#else
+#define LIB_DEFAULT "binaries/linux64/BeamBody.so"
+#endif
+
+/* printf-style checking of our own formatting functions: on mingw-w64 with its C99 stdio the
+ * archetype is gnu_printf (plain `printf` would mean msvcrt's, which knows no %zu). */
+#ifdef __MINGW_PRINTF_FORMAT
+#define PRINTF_LIKE(fmt, first) __attribute__((format(__MINGW_PRINTF_FORMAT, fmt, first)))
+#else
+#define PRINTF_LIKE(fmt, first) __attribute__((format(printf, fmt, first)))
+#endif
+
+/* A symbol of the library as a generic function pointer; SYM below converts it to the
+ * function's type (a conversion between function pointer types, which ISO C allows). */
+typedef void (*LibFn)(void);
+
+#ifdef _WIN32
+
+typedef HMODULE Lib;
+
+/* The text of GetLastError(); one buffer, used by the main thread only. */
+static const char *lib_error(void) {
+    static char text[512];
+    DWORD code = GetLastError();
+    int n = snprintf(text, sizeof text, "Windows error %lu: ", (unsigned long)code);
+    DWORD got = FormatMessageA(FORMAT_MESSAGE_FROM_SYSTEM | FORMAT_MESSAGE_IGNORE_INSERTS, NULL,
+                               code, 0, text + n, (DWORD)(sizeof text - (size_t)n), NULL);
+    while (got > 0 && (text[n + got - 1] == '\n' || text[n + got - 1] == '\r')) got--;
+    text[n + got] = '\0';
+    return text;
+}
+
+/* Windows paths: the FMU path is built with '/', which LoadLibraryA's documentation asks not
+ * to use (and which GetModuleHandleA would not match). */
+static void win_path(char *dst, size_t cap, const char *src) {
+    snprintf(dst, cap, "%s", src);
+    for (char *p = dst; *p; p++)
+        if (*p == '/') *p = '\\';
+}
+
+static Lib lib_open(const char *path) {
+    char p[4096];
+    win_path(p, sizeof p, path);
+    return LoadLibraryA(p);
+}
+
+static LibFn lib_sym(Lib lib, const char *name) {
+    /* FARPROC to void (*)(void): the generic function pointer, no -Wcast-function-type */
+    return (LibFn)(void (*)(void))GetProcAddress(lib, name);
+}
+
+static int lib_close(Lib lib) { return FreeLibrary(lib) ? 0 : -1; }
+
+/* Whether the library is still mapped (after lib_close); does not load it or count a use. */
+static int lib_loaded(const char *path) {
+    char p[4096];
+    win_path(p, sizeof p, path);
+    return GetModuleHandleA(p) != NULL;
+}
+
+/* No message boxes: a DLL that does not load, or a crash, must end the process with a status
+ * that the test sees (under wine, a crash would otherwise start winedbg). */
+static void platform_init(void) {
+    SetErrorMode(SEM_FAILCRITICALERRORS | SEM_NOGPFAULTERRORBOX | SEM_NOOPENFILEERRORBOX);
+}
+
+/* Windows threads, not winpthreads: host.exe then needs no mingw runtime DLL, and the FMU sees
+ * the threads a native Windows host (MSVC-built, using CreateThread or std::thread) creates. */
+typedef HANDLE Thread;
+typedef DWORD ThreadResult;
+#define THREAD_CALL WINAPI
+static int thread_start(Thread *t, ThreadResult(THREAD_CALL *fn)(void *), void *arg) {
+    *t = CreateThread(NULL, 0, fn, arg, 0, NULL);
+    return *t ? 0 : -1;
+}
+static void thread_join(Thread t) {
+    WaitForSingleObject(t, INFINITE);
+    CloseHandle(t);
+}
+
+/* A one-shot start gate for n threads (what pthread_barrier_wait does once). */
+typedef struct {
+    CRITICAL_SECTION lock;
+    CONDITION_VARIABLE all_in;
+    unsigned n, arrived;
+} Gate;
+static int gate_init(Gate *g, unsigned n) {
+    InitializeCriticalSection(&g->lock);
+    InitializeConditionVariable(&g->all_in);
+    g->n = n;
+    g->arrived = 0;
+    return 0;
+}
+static void gate_wait(Gate *g) {
+    EnterCriticalSection(&g->lock);
+    if (++g->arrived == g->n) WakeAllConditionVariable(&g->all_in);
+    while (g->arrived < g->n) SleepConditionVariableCS(&g->all_in, &g->lock, INFINITE);
+    LeaveCriticalSection(&g->lock);
+}
+static void gate_destroy(Gate *g) { DeleteCriticalSection(&g->lock); }
+
+/* seconds on a monotonic clock */
+static double now(void) {
+    LARGE_INTEGER f, c;
+    QueryPerformanceFrequency(&f);
+    QueryPerformanceCounter(&c);
+    return (double)c.QuadPart / (double)f.QuadPart;
+}
+
+#else /* POSIX */
+
+typedef void *Lib;
+
+static const char *lib_error(void) {
+    const char *e = dlerror();
+    return e ? e : "(no dlerror)";
+}
+
+/* RTLD_LOCAL: the FMU's symbols must not leak into the global namespace (several FMUs export
+ * the same fmi2* names); RTLD_NOW: a missing dependency fails here, not mid-run. */
+static Lib lib_open(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+
+static LibFn lib_sym(Lib lib, const char *name) {
+    /* dlsym returns void *, which POSIX (not ISO C) allows to convert to a function pointer. */
+    return (LibFn)dlsym(lib, name);
+}
+
+static int lib_close(Lib lib) { return dlclose(lib) ? -1 : 0; }
+
+/* RTLD_NOLOAD: a handle only if the library is still mapped, without loading it. */
+static int lib_loaded(const char *path) {
+    void *still = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NOLOAD);
+    if (still) dlclose(still);
+    return still != NULL;
+}
+
+static void platform_init(void) {}
+
+typedef pthread_t Thread;
+typedef void *ThreadResult;
+#define THREAD_CALL
+static int thread_start(Thread *t, ThreadResult (*fn)(void *), void *arg) {
+    return pthread_create(t, NULL, fn, arg) ? -1 : 0;
+}
+static void thread_join(Thread t) { pthread_join(t, NULL); }
+
+/* A one-shot start gate for n threads; a mutex and a condition variable rather than
+ * pthread_barrier_t, which macOS lacks. */
+typedef struct {
+    pthread_mutex_t lock;
+    pthread_cond_t all_in;
+    unsigned n, arrived;
+} Gate;
+static int gate_init(Gate *g, unsigned n) {
+    g->n = n;
+    g->arrived = 0;
+    if (pthread_mutex_init(&g->lock, NULL)) return -1;
+    if (pthread_cond_init(&g->all_in, NULL)) {
+        pthread_mutex_destroy(&g->lock);
+        return -1;
+    }
+    return 0;
+}
+static void gate_wait(Gate *g) {
+    pthread_mutex_lock(&g->lock);
+    if (++g->arrived == g->n) pthread_cond_broadcast(&g->all_in);
+    while (g->arrived < g->n) pthread_cond_wait(&g->all_in, &g->lock);
+    pthread_mutex_unlock(&g->lock);
+}
+static void gate_destroy(Gate *g) {
+    pthread_cond_destroy(&g->all_in);
+    pthread_mutex_destroy(&g->lock);
+}
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+#endif
 
 /* ----- FMI 2.0 types ---------------------------------------------------------------------- */
 
@@ -173,7 +402,7 @@ typedef struct {
     char msg[512];
 } Err;
 
-static int fail(Err *e, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int fail(Err *e, const char *fmt, ...) PRINTF_LIKE(2, 3);
 static int fail(Err *e, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
@@ -288,7 +517,8 @@ static void ctx_init(LogCtx *ctx, const char *name) {
 
 /* ----- loading ------------------------------------------------------------------------------ */
 
-static char *read_file(const char *path) {
+/* The whole file, NUL-terminated (for the XML); its length into *size if size is not NULL. */
+static char *read_file(const char *path, size_t *size) {
     FILE *f = fopen(path, "rb");
     if (!f) return NULL;
     size_t cap = 1 << 16, n = 0;
@@ -302,8 +532,14 @@ static char *read_file(const char *path) {
             buf = bigger;
         }
     }
+    int bad = ferror(f);
     fclose(f);
+    if (buf && bad) {
+        free(buf);
+        buf = NULL;
+    }
     if (buf) buf[n] = '\0';
+    if (size) *size = n;
     return buf;
 }
 
@@ -321,7 +557,7 @@ static int find_vr(const char *xml, const char *name, fmi2ValueReference *vr, Er
 static int read_model(const char *unzipdir, Model *m, Err *err) {
     char path[4096];
     snprintf(path, sizeof path, "%s/modelDescription.xml", unzipdir);
-    char *xml = read_file(path);
+    char *xml = read_file(path, NULL);
     if (!xml) return fail(err, "cannot read %s", path);
     int rc = -1;
     const char *g = strstr(xml, " guid=\"");
@@ -342,12 +578,11 @@ out:
     return rc;
 }
 
-static int load_api(void *lib, Api *api, Err *err) {
+static int load_api(Lib lib, Api *api, Err *err) {
     for (size_t k = 0; k < N_EXPORTS; k++)
-        if (!dlsym(lib, ALL_EXPORTS[k]))
-            return fail(err, "the library does not export %s (%s)", ALL_EXPORTS[k], dlerror());
-    /* dlsym returns void *, which POSIX (not ISO C) allows to convert to a function pointer. */
-#define SYM(field, name) api->field = (__typeof__(api->field))dlsym(lib, name)
+        if (!lib_sym(lib, ALL_EXPORTS[k]))
+            return fail(err, "the library does not export %s (%s)", ALL_EXPORTS[k], lib_error());
+#define SYM(field, name) api->field = (__typeof__(api->field))lib_sym(lib, name)
     SYM(GetTypesPlatform, "fmi2GetTypesPlatform");
     SYM(GetVersion, "fmi2GetVersion");
     SYM(SetDebugLogging, "fmi2SetDebugLogging");
@@ -396,12 +631,6 @@ static fmi2Component instantiate(const Host *h, LogCtx *ctx, fmi2CallbackFunctio
     return h->api->Instantiate(ctx->name, type, guid, h->resources, cb, fmi2False, logging_on);
 }
 
-static double now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* ----- 1 and 3: the paper's scene ----------------------------------------------------------- */
 
 typedef struct {
@@ -413,9 +642,85 @@ typedef struct {
     double v1[N_POINTS], theta1[N_POINTS], u2[N_POINTS];
 } Traj;
 
+/* --save-state and --resume: only the paper's scene of check 1 uses them. */
+typedef struct {
+    int save_step;           /* -1: none; else save the state after this communication step */
+    const char *save_file;   /* where the serialized state goes */
+    const char *resume_file; /* NULL: start at t = 0; else restore this state first */
+    int first;               /* out: the first communication step of the run (0 or resumed) */
+    size_t saved_bytes, resumed_bytes; /* out: the sizes of the serialized states */
+} StateIO;
+
+/* Takes the instance's state, writes its serialization to io->save_file and frees it. */
+static int save_state(const Host *h, fmi2Component c, LogCtx *lc, StateIO *io, Err *err) {
+    const Api *f = h->api;
+    const char *who = lc->name;
+    fmi2FMUstate s = NULL;
+    char *bytes = NULL;
+    size_t size = 0;
+    FILE *out_file = NULL;
+    int rc = -1;
+    OK(f->GetFMUstate(c, &s));
+    OK(f->SerializedFMUstateSize(c, s, &size));
+    if (size == 0 || size > (1u << 24)) {
+        fail(err, "%s: serialized size %zu is implausible", who, size);
+        goto out;
+    }
+    if (!(bytes = malloc(size))) {
+        fail(err, "out of memory");
+        goto out;
+    }
+    OK(f->SerializeFMUstate(c, s, bytes, size));
+    /* binary mode: no newline translation on Windows */
+    if (!(out_file = fopen(io->save_file, "wb")) || fwrite(bytes, 1, size, out_file) != size) {
+        fail(err, "%s: cannot write %s", who, io->save_file);
+        goto out;
+    }
+    io->saved_bytes = size;
+    rc = 0;
+out:
+    if (out_file && fclose(out_file) != 0 && rc == 0)
+        rc = fail(err, "cannot write %s", io->save_file);
+    if (s) f->FreeFMUstate(c, &s);
+    free(bytes);
+    return rc;
+}
+
+/* Restores the state serialized in io->resume_file into the (initialized) instance; its
+ * communication step into *step. */
+static int resume_state(const Host *h, fmi2Component c, LogCtx *lc, StateIO *io, int *step,
+                        Err *err) {
+    const Api *f = h->api;
+    const char *who = lc->name;
+    fmi2FMUstate s = NULL;
+    size_t size = 0;
+    int rc = -1;
+    char *bytes = read_file(io->resume_file, &size);
+    if (!bytes) return fail(err, "%s: cannot read %s", who, io->resume_file);
+    OK(f->DeSerializeFMUstate(c, bytes, size, &s));
+    OK(f->SetFMUstate(c, s));
+    fmi2Real t = NAN;
+    OK(f->GetRealStatus(c, fmi2LastSuccessfulTime, &t));
+    double k = round(t / H);
+    if (!(k >= 0 && k <= N_STEPS && fabs(t - k * H) <= 1e-9)) {
+        fail(err, "%s: the state of %s is at t = %.17g, not at a communication point", who,
+             io->resume_file, t);
+        goto out;
+    }
+    *step = (int)k;
+    io->resumed_bytes = size;
+    rc = 0;
+out:
+    if (s) f->FreeFMUstate(c, &s);
+    free(bytes);
+    return rc;
+}
+
 /* Instantiates, runs the scene with `cfg`, records the outputs at every communication point
- * (all must be finite), terminates and frees. */
-static int run_scene(const Host *h, const char *name, const SceneCfg *cfg, Traj *out, Err *err) {
+ * (all must be finite), terminates and frees. With `io` (else NULL), first restores a state
+ * and/or saves one on the way (see StateIO); points before the first step stay 0. */
+static int run_scene(const Host *h, const char *name, const SceneCfg *cfg, StateIO *io,
+                     Traj *out, Err *err) {
     const Api *f = h->api;
     const Model *m = h->model;
     const char *who = name;
@@ -425,7 +730,7 @@ static int run_scene(const Host *h, const char *name, const SceneCfg *cfg, Traj 
     fmi2Component c = instantiate(h, &ctx, &cb, m->guid, fmi2CoSimulation, fmi2False);
     if (!c) return fail(err, "%s: fmi2Instantiate returned NULL (%s)", name, ctx.last);
 
-    int rc = -1;
+    int rc = -1, first = 0;
     const fmi2ValueReference out_vr[3] = {m->v1, m->theta1, m->u2};
     const fmi2Integer law = PHI_SOURCE_LAW;
     double y[3];
@@ -436,8 +741,10 @@ static int run_scene(const Host *h, const char *name, const SceneCfg *cfg, Traj 
     if (!isnan(cfg->ei)) OK(f->SetReal(c, &m->ei, 1, &cfg->ei));
     OK(f->EnterInitializationMode(c));
     OK(f->ExitInitializationMode(c));
-    for (int k = 0; k <= N_STEPS; k++) {
-        if (k > 0) OK(f->DoStep(c, (k - 1) * H, H, fmi2True));
+    if (io && io->resume_file && resume_state(h, c, lc, io, &first, err)) goto out;
+    if (io) io->first = first;
+    for (int k = first; k <= N_STEPS; k++) {
+        if (k > first) OK(f->DoStep(c, (k - 1) * H, H, fmi2True));
         OK(f->GetReal(c, out_vr, 3, y));
         if (!isfinite(y[0]) || !isfinite(y[1]) || !isfinite(y[2])) {
             fail(err, "%s: non-finite output at t = %g: v1 = %g, theta1 = %g, u2 = %g", name,
@@ -447,6 +754,7 @@ static int run_scene(const Host *h, const char *name, const SceneCfg *cfg, Traj 
         out->v1[k] = y[0];
         out->theta1[k] = y[1];
         out->u2[k] = y[2];
+        if (io && k == io->save_step && save_state(h, c, lc, io, err)) goto out;
     }
     fmi2Real t_last = NAN;
     OK(f->GetRealStatus(c, fmi2LastSuccessfulTime, &t_last));
@@ -464,39 +772,64 @@ out:
     return rc;
 }
 
-/* FNV-1a over the bytes of a trajectory: a compact fingerprint for the summary. */
-static uint64_t fingerprint(const Traj *t) {
-    const unsigned char *p = (const unsigned char *)t;
+/* FNV-1a over the bytes of v1, theta1 and u2 from point `first` on: a compact fingerprint for
+ * the summary (for first = 0, that of all the trajectory's bytes in memory order). */
+static uint64_t fingerprint(const Traj *t, int first) {
+    const double *parts[3] = {t->v1, t->theta1, t->u2};
     uint64_t hash = 0xcbf29ce484222325u;
-    for (size_t k = 0; k < sizeof *t; k++) hash = (hash ^ p[k]) * 0x100000001b3u;
+    for (int j = 0; j < 3; j++) {
+        const unsigned char *p = (const unsigned char *)(parts[j] + first);
+        for (size_t k = 0; k < (size_t)(N_POINTS - first) * sizeof(double); k++)
+            hash = (hash ^ p[k]) * 0x100000001b3u;
+    }
     return hash;
 }
 
-static int check_scene(const Host *h, const char *out_csv, Err *err) {
+static uint64_t bits(double x) {
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+static int check_scene(const Host *h, const char *out_csv, StateIO *io, Err *err) {
     static Traj t; /* 24 kB: keep it off the stack */
     const SceneCfg paper = {NAN, NAN};
     double t0 = now();
-    if (run_scene(h, "paper", &paper, &t, err)) return -1;
+    if (run_scene(h, "paper", &paper, io, &t, err)) return -1;
     double dt = now() - t0;
+    int first = io->first;
+    if (io->save_step >= 0 && io->saved_bytes == 0)
+        return fail(err, "--save-state %d: the run started at step %d, after it", io->save_step,
+                    first);
 
     double max_v1 = 0.0, max_theta1 = 0.0, max_u2 = 0.0;
-    for (int k = 0; k < N_POINTS; k++) {
+    for (int k = first; k < N_POINTS; k++) {
         max_v1 = fmax(max_v1, fabs(t.v1[k]));
         max_theta1 = fmax(max_theta1, fabs(t.theta1[k]));
         max_u2 = fmax(max_u2, fabs(t.u2[k]));
     }
-    printf("scene points=%d h=%g t_end=%g seconds=%.3f\n", N_POINTS, H, T_END, dt);
+    if (io->resume_file)
+        printf("resume file=%s bytes=%zu step=%d t=%.17g\n", io->resume_file, io->resumed_bytes,
+               first, first * H);
+    if (io->save_step >= 0)
+        printf("save_state file=%s bytes=%zu step=%d t=%.17g\n", io->save_file, io->saved_bytes,
+               io->save_step, io->save_step * H);
+    printf("scene points=%d first=%d h=%g t_end=%g seconds=%.3f\n", N_POINTS - first, first, H,
+           T_END, dt);
     printf("scene_final v1=%.17g theta1=%.17g u2=%.17g\n", t.v1[N_STEPS], t.theta1[N_STEPS],
            t.u2[N_STEPS]);
     printf("scene_max_abs v1=%.17g theta1=%.17g u2=%.17g\n", max_v1, max_theta1, max_u2);
-    printf("scene fingerprint=%016llx\n", (unsigned long long)fingerprint(&t));
+    printf("scene fingerprint=%016llx\n", (unsigned long long)fingerprint(&t, first));
 
     if (out_csv) {
-        FILE *f = fopen(out_csv, "w");
+        /* binary mode: the same bytes on every platform (no \r\n on Windows) */
+        FILE *f = fopen(out_csv, "wb");
         if (!f) return fail(err, "cannot write %s", out_csv);
-        fprintf(f, "t,v1,theta1,u2\n");
-        for (int k = 0; k < N_POINTS; k++)
-            fprintf(f, "%.17g,%.17g,%.17g,%.17g\n", k * H, t.v1[k], t.theta1[k], t.u2[k]);
+        fprintf(f, "t,v1,theta1,u2,v1_bits,theta1_bits,u2_bits\n");
+        for (int k = first; k < N_POINTS; k++)
+            fprintf(f, "%.17g,%.17g,%.17g,%.17g,%016llx,%016llx,%016llx\n", k * H, t.v1[k],
+                    t.theta1[k], t.u2[k], (unsigned long long)bits(t.v1[k]),
+                    (unsigned long long)bits(t.theta1[k]), (unsigned long long)bits(t.u2[k]));
         if (fclose(f) != 0) return fail(err, "cannot write %s", out_csv);
     }
     return 0;
@@ -704,7 +1037,7 @@ static int check_cycles(const Host *h, int n, Err *err) {
 
 typedef struct {
     const Host *host;
-    pthread_barrier_t *start;
+    Gate *start;
     int index;
     SceneCfg cfg;
     Traj traj;
@@ -718,23 +1051,23 @@ static SceneCfg thread_cfg(int i) {
     return cfg;
 }
 
-static void *thread_main(void *arg) {
+static ThreadResult THREAD_CALL thread_main(void *arg) {
     Job *job = arg;
     char name[64];
     snprintf(name, sizeof name, "thread%d", job->index);
     /* all threads start together, so that their instantiations and steps overlap */
-    pthread_barrier_wait(job->start);
-    job->rc = run_scene(job->host, name, &job->cfg, &job->traj, &job->err);
-    return NULL;
+    gate_wait(job->start);
+    job->rc = run_scene(job->host, name, &job->cfg, NULL, &job->traj, &job->err);
+    return 0;
 }
 
 static int check_threads(const Host *h, int n, Err *err) {
     Job *jobs = calloc((size_t)n, sizeof *jobs);
     Traj *ref = calloc((size_t)n, sizeof *ref);
-    pthread_t *tid = calloc((size_t)n, sizeof *tid);
+    Thread *tid = calloc((size_t)n, sizeof *tid);
     int rc = -1, started = 0;
-    pthread_barrier_t start;
-    int barrier = 0;
+    Gate start;
+    int gate = 0;
     if (!jobs || !ref || !tid) {
         fail(err, "out of memory");
         goto out;
@@ -745,26 +1078,26 @@ static int check_threads(const Host *h, int n, Err *err) {
         char name[64];
         snprintf(name, sizeof name, "sequential%d", i);
         SceneCfg cfg = thread_cfg(i);
-        if (run_scene(h, name, &cfg, &ref[i], err)) goto out;
+        if (run_scene(h, name, &cfg, NULL, &ref[i], err)) goto out;
     }
     double t_seq = now() - t0;
 
-    if (pthread_barrier_init(&start, NULL, (unsigned)n)) {
-        fail(err, "pthread_barrier_init failed");
+    if (gate_init(&start, (unsigned)n)) {
+        fail(err, "cannot create the start gate (mutex, condition variable)");
         goto out;
     }
-    barrier = 1;
+    gate = 1;
     t0 = now();
     for (int i = 0; i < n; i++) {
         jobs[i] = (Job){.host = h, .start = &start, .index = i, .cfg = thread_cfg(i), .rc = -1};
-        if (pthread_create(&tid[i], NULL, thread_main, &jobs[i])) {
-            fail(err, "pthread_create failed for thread %d", i);
-            /* the started threads wait at the barrier for ever: exit without joining */
+        if (thread_start(&tid[i], thread_main, &jobs[i])) {
+            fail(err, "cannot start thread %d", i);
+            /* the started threads wait at the gate for ever: exit without joining */
             goto out;
         }
         started++;
     }
-    for (int i = 0; i < n; i++) pthread_join(tid[i], NULL);
+    for (int i = 0; i < n; i++) thread_join(tid[i]);
     double t_par = now() - t0;
 
     int distinct = 0;
@@ -795,41 +1128,50 @@ static int check_threads(const Host *h, int n, Err *err) {
     for (int i = 0; i < n; i++)
         printf("thread %d phi_end=%.17g EI=%.17g final_v1=%.17g fingerprint=%016llx\n", i,
                jobs[i].cfg.phi_end, jobs[i].cfg.ei, jobs[i].traj.v1[N_STEPS],
-               (unsigned long long)fingerprint(&jobs[i].traj));
+               (unsigned long long)fingerprint(&jobs[i].traj, 0));
     rc = 0;
 out:
     if (started < n && started > 0) {
         fprintf(stderr, "host: %s\n", err->msg);
         exit(1);
     }
-    if (barrier) pthread_barrier_destroy(&start);
+    if (gate) gate_destroy(&start);
     free(jobs);
     free(ref);
     free(tid);
     return rc;
 }
 
-/* dlclose, then reports whether the library really left the process: glibc keeps it mapped
- * (DF_1_NODELETE) when it registered thread-local destructors, for instance. */
-static int unload(void *lib, const char *path, Err *err) {
-    if (dlclose(lib)) return fail(err, "dlclose: %s", dlerror());
-    void *still = dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NOLOAD);
-    printf("dlclose unloaded=%d\n", still == NULL);
-    if (still) dlclose(still);
+/* dlclose (FreeLibrary), then reports whether the library really left the process: glibc
+ * keeps it mapped (DF_1_NODELETE) when it registered thread-local destructors, for instance. */
+static int unload(Lib lib, const char *path, Err *err) {
+    if (lib_close(lib)) return fail(err, "unloading %s: %s", path, lib_error());
+    printf("dlclose unloaded=%d\n", !lib_loaded(path));
     return 0;
 }
 
 /* ----- main --------------------------------------------------------------------------------- */
 
 static int usage(void) {
-    fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB.so] "
+    fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB] "
+                    "[--save-state S STATE.bin] [--resume STATE.bin] "
                     "[--no-dlclose | --reloads R]\n");
     return 2;
+}
+
+/* The FMU's resources folder as a file URI (file:///C:/... on Windows, file:///tmp/... here). */
+static void resources_uri(char *dst, size_t cap, const char *unzipdir) {
+    const char *slash = unzipdir[0] == '/' ? "" : "/";
+    snprintf(dst, cap, "file://%s%s/resources", slash, unzipdir);
+    for (char *p = dst; *p; p++)
+        if (*p == '\\') *p = '/';
 }
 
 int main(int argc, char **argv) {
     const char *unzipdir = NULL, *out_csv = NULL, *so = NULL;
     int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1;
+    StateIO io = {.save_step = -1};
+    platform_init();
     for (int a = 1; a < argc; a++) {
         if (!strcmp(argv[a], "--cycles") && a + 1 < argc)
             cycles = atoi(argv[++a]);
@@ -841,6 +1183,11 @@ int main(int argc, char **argv) {
             reloads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--so") && a + 1 < argc)
             so = argv[++a];
+        else if (!strcmp(argv[a], "--save-state") && a + 2 < argc) {
+            io.save_step = atoi(argv[++a]);
+            io.save_file = argv[++a];
+        } else if (!strcmp(argv[a], "--resume") && a + 1 < argc)
+            io.resume_file = argv[++a];
         else if (!strcmp(argv[a], "--no-dlclose"))
             do_dlclose = 0;
         else if (argv[a][0] != '-' && !unzipdir)
@@ -848,8 +1195,9 @@ int main(int argc, char **argv) {
         else
             return usage();
     }
-    if (!unzipdir || cycles < 0 || threads < 1 || threads > 256 || reloads < 0 ||
-        (reloads > 0 && !do_dlclose))
+    if (!unzipdir || cycles < 0 || threads < 0 || threads > 256 || reloads < 0 ||
+        (reloads > 0 && !do_dlclose) ||
+        (io.save_file && (io.save_step < 0 || io.save_step > N_STEPS)))
         return usage();
 
     Err err = {{0}};
@@ -859,14 +1207,12 @@ int main(int argc, char **argv) {
     if (so)
         snprintf(lib_path, sizeof lib_path, "%s", so);
     else
-        snprintf(lib_path, sizeof lib_path, "%s/binaries/linux64/BeamBody.so", unzipdir);
-    snprintf(resources, sizeof resources, "file://%s/resources", unzipdir);
+        snprintf(lib_path, sizeof lib_path, "%s/%s", unzipdir, LIB_DEFAULT);
+    resources_uri(resources, sizeof resources, unzipdir);
 
-    /* RTLD_LOCAL: the FMU's symbols must not leak into the global namespace (several FMUs
-     * export the same fmi2* names); RTLD_NOW: a missing dependency fails here, not mid-run. */
-    void *lib = dlopen(lib_path, RTLD_NOW | RTLD_LOCAL);
+    Lib lib = lib_open(lib_path);
     if (!lib) {
-        fail(&err, "dlopen(%s): %s", lib_path, dlerror());
+        fail(&err, "loading %s: %s", lib_path, lib_error());
         goto failed;
     }
     Api api;
@@ -874,9 +1220,9 @@ int main(int argc, char **argv) {
     Host host = {&api, &model, resources};
     printf("host library=%s guid=%s\n", lib_path, model.guid);
 
-    if (check_scene(&host, out_csv, &err)) goto failed;
+    if (check_scene(&host, out_csv, &io, &err)) goto failed;
     if (check_cycles(&host, cycles, &err)) goto failed;
-    if (check_threads(&host, threads, &err)) goto failed;
+    if (threads > 0 && check_threads(&host, threads, &err)) goto failed;
 
     long bad = atomic_load(&g_bad_log);
     if (bad) {
@@ -890,8 +1236,8 @@ int main(int argc, char **argv) {
         /* Load, use and unload the library again: anything a load leaves behind then shows up
          * once per load in valgrind's leak summary. */
         for (int r = 0; r < reloads; r++) {
-            if (!(lib = dlopen(lib_path, RTLD_NOW | RTLD_LOCAL))) {
-                fail(&err, "reload %d: dlopen(%s): %s", r, lib_path, dlerror());
+            if (!(lib = lib_open(lib_path))) {
+                fail(&err, "reload %d: loading %s: %s", r, lib_path, lib_error());
                 goto failed;
             }
             Api again;

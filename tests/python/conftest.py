@@ -159,3 +159,22 @@ def fmu_report():
     import fmu_util
 
     return fmu_util.Report()
+
+
+# --------------------------------------------------------------------------------------------------
+# the C host (tests/python/test_c_host*.py; helpers in c_host_util.py)
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="session")
+def host_exe(tmp_path_factory) -> Path:
+    """tests/c_host/host.c compiled with the system's cc; any warning fails the build (-Werror)."""
+    import shutil
+
+    from c_host_util import compile_host, missing_tool
+
+    cc = shutil.which("cc")
+    if cc is None:
+        missing_tool("no C compiler: `cc` is not on PATH")
+    exe = tmp_path_factory.mktemp("c_host") / "host"
+    return compile_host(cc, exe, flags=["-pthread"], libs=["-ldl", "-lm"])

@@ -21,34 +21,29 @@ state is alive (the pointer registry drops its tables when it empties; the GUID 
 Before that fix this run lost 150-260 bytes per load, which a host that reloads the FMU for every run
 (FMPy does) would pay each time.
 
+Windows (wine), Linux aarch64 (qemu) and the bit-identity across platforms are in
+test_c_host_platforms.py; the helpers both use are in c_host_util.py, the compiled native host is the
+session fixture `host_exe` (conftest.py).
+
 Figures go to target/fmu-report.txt.
 """
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
-import subprocess
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fmu_util import PHI_SOURCE_LAW, REPO, Slave, cli
+from c_host_util import (CYCLES, H, N_STEPS, T_END, THREADS, host_failure, missing_tool, parse_summary,
+                         read_trajectory, run_host)
+from fmu_util import PHI_SOURCE_LAW, Slave, cli
 
-HOST_DIR = REPO / "tests" / "c_host"
-HOST_C = HOST_DIR / "host.c"
-
-H = 0.01  # the host's communication step (host.c: H, N_STEPS)
-N_STEPS = 1020
-T_END = 10.2
 RTOL = 1e-6  # the FMU's default tolerance (DefaultExperiment) and the CLI's default rtol
 K_TOL = 1000.0  # see the module docstring
 
-CYCLES = 1000
-THREADS = 8
 # Under valgrind the full counts take about 5 s on this machine (one core: valgrind serialises
 # threads), so the main valgrind run keeps them; the reload run only needs a few loads.
 VALGRIND_CYCLES = CYCLES
@@ -68,43 +63,9 @@ VALGRIND_ARGS = [
 ]
 
 
-def missing_tool(what: str):
-    """A missing compiler or valgrind fails the test on CI ($CI set) and skips it elsewhere."""
-    if os.environ.get("CI"):
-        pytest.fail(f"{what} (CI is set: this test must run there)", pytrace=False)
-    pytest.skip(what)
-
-
 # --------------------------------------------------------------------------------------------------
 # fixtures
 # --------------------------------------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def host_exe(tmp_path_factory) -> Path:
-    """tests/c_host/host.c compiled with the system's cc; any warning fails the build (-Werror)."""
-    cc = shutil.which("cc")
-    if cc is None:
-        missing_tool("no C compiler: `cc` is not on PATH")
-    exe = tmp_path_factory.mktemp("c_host") / "host"
-    cmd = [cc, "-O1", "-g", "-pthread", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(HOST_C),
-           "-ldl", "-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0 and not proc.stderr.strip(), (
-        f"`{' '.join(cmd)}` exited with {proc.returncode}:\n{proc.stderr[-4000:]}"
-    )
-    return exe
-
-
-def run_host(cmd, timeout) -> tuple[subprocess.CompletedProcess, float]:
-    t0 = time.perf_counter()
-    proc = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, timeout=timeout)
-    return proc, time.perf_counter() - t0
-
-
-def host_failure(proc, seconds) -> str:
-    return (f"host exited with {proc.returncode} after {seconds:.1f} s\n"
-            f"--- stdout (tail) ---\n{proc.stdout[-3000:]}\n--- stderr (tail) ---\n{proc.stderr[-3000:]}")
 
 
 @pytest.fixture(scope="module")
@@ -115,19 +76,6 @@ def native(host_exe, fmu_unzipdir, tmp_path_factory):
         [host_exe, fmu_unzipdir, "--cycles", CYCLES, "--threads", THREADS, "-o", traj], NATIVE_TIMEOUT
     )
     return proc, seconds, traj
-
-
-def parse_summary(stdout: str) -> dict[str, dict[str, str]]:
-    """The host's `<what> key=value ...` lines as {what: {key: value}} (later lines of the same kind
-    override earlier ones, except `thread <i>` lines, which are keyed by index)."""
-    out: dict[str, dict[str, str]] = {}
-    for line in stdout.splitlines():
-        words = line.split()
-        if not words:
-            continue
-        what = words[0] if words[0] != "thread" else f"thread {words[1]}"
-        out.setdefault(what, {}).update(w.split("=", 1) for w in words[1:] if "=" in w)
-    return out
 
 
 # --------------------------------------------------------------------------------------------------
@@ -159,9 +107,9 @@ def host_trajectory(native) -> dict:
     if proc.returncode != 0 or not traj.is_file():
         pytest.fail("the native host run failed (see test_native_host_passes)\n" + host_failure(proc, seconds),
                     pytrace=False)
-    data = np.loadtxt(traj, delimiter=",", skiprows=1, ndmin=2)  # %.17g: float() round-trips exactly
-    assert data.shape == (N_STEPS + 1, 4), data.shape
-    return {"t": data[:, 0], "v1": data[:, 1], "theta1": data[:, 2], "u2": data[:, 3]}
+    data = read_trajectory(traj)  # %.17g, checked against the bits the host wrote beside it
+    assert data["t"].shape == (N_STEPS + 1,), data["t"].shape
+    return data
 
 
 def test_host_matches_fmpy_bit_for_bit(native, fmu_unzipdir, fmu_model_description, fmu_report):
