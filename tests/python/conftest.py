@@ -171,7 +171,8 @@ def host_exe(tmp_path_factory) -> Path:
     """tests/c_host/host.c compiled with the system's cc; any warning fails the build (-Werror)."""
     import shutil
 
-    from c_host_util import compile_host, missing_tool
+    from c_host_util import compile_host
+    from fmu_util import missing_tool
 
     cc = shutil.which("cc")
     if cc is None:

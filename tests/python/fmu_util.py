@@ -5,6 +5,9 @@
   (src/model/phi.rs, PhiPiece::Turn / Hold), so that samples are bit-identical to the CLI's;
 - CLI runs (`beam-body simulate scenes/paper.toml --set ...`), cached per session;
 - `Slave`: a thin wrapper of fmpy.fmi2.FMU2Slave with a logger that collects the FMU's messages;
+- for hosts written by others (test_fmu_libcosim.py, test_fmu_ecos.py): a copy of the FMU that traces
+  every FMI call the host makes (`traced_fmu`, tests/python/trace_shim.c), a reader of that trace, and
+  `replay`, FMPy making the calls a host made;
 - the measured-figure report, target/fmu-report.txt (appended, one block per session).
 """
 
@@ -12,8 +15,13 @@ from __future__ import annotations
 
 import math
 import os
+import re
+import shutil
+import subprocess
 import time
+import zipfile
 from ctypes import byref
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -255,6 +263,135 @@ def run_derivatives(slave: Slave, times, names=OUTPUTS, phi_fn=law) -> np.ndarra
         slave.step_input(a, b - a, p, dp, ddp)
         out.append(slave.get(names))
     return np.array(out)
+
+
+def run_values(slave: Slave, steps, names=STATES) -> np.ndarray:
+    """Steps an input-mode instance through `steps`, (tc, h, phi) each: setReal(phi), doStep(tc, h),
+    getReal(names) after the step. One row per step."""
+    out = []
+    for tc, h, phi in steps:
+        slave.step_input(tc, h, phi)
+        out.append(slave.get(names))
+    return np.array(out)
+
+
+def replay(unzipdir, model_description, steps, name, names=STATES):
+    """A fresh FMU2Slave (Slave) through `steps` as run_values does, after setupExperiment with neither
+    tolerance nor stop time (what libcosim and Ecos send) and no parameter set: (rows, wall seconds of
+    the steps)."""
+    s = Slave(unzipdir, model_description, name=name)
+    try:
+        s.start(tolerance=None, stop_time=None)
+        start = time.perf_counter()
+        rows = run_values(s, steps, names)
+        return rows, time.perf_counter() - start
+    finally:
+        s.free()
+
+
+# --------------------------------------------------------------------------------------------------
+# hosts written by others: the calls they make
+# --------------------------------------------------------------------------------------------------
+
+TRACE_SHIM_C = REPO / "tests" / "python" / "trace_shim.c"
+_TRACED = 0  # traced copies made in this process
+
+
+def missing_tool(what: str):
+    """A missing compiler, emulator, valgrind or host package fails the test on CI ($CI set) and
+    skips it elsewhere."""
+    import pytest
+
+    if os.environ.get("CI"):
+        pytest.fail(f"{what} (CI is set: this test must run there)", pytrace=False)
+    pytest.skip(what)
+
+
+def traced_fmu(fmu_file: Path, workdir: Path) -> Path:
+    """A copy of the FMU, workdir/BeamBody.fmu, in which binaries/linux64/BeamBody.so is
+    tests/python/trace_shim.c (compiled here with cc) in front of the real library, renamed
+    BeamBody_real_<pid>_<n>.so. Any host that runs it writes the FMU's `logCalls` trace of every call
+    to the file named by $BEAM_BODY_TRACE (read it with read_trace). Everything else is the real FMU."""
+    import pytest
+
+    if shutil.which("cc") is None:
+        missing_tool("no C compiler: `cc` is not on PATH (needed for the call-tracing shim)")
+    global _TRACED
+    _TRACED += 1
+    real = f"BeamBody_real_{os.getpid()}_{_TRACED}.so"  # unique: see trace_shim.c, REAL_LIBRARY
+    unzipped = workdir / "traced"
+    with zipfile.ZipFile(fmu_file) as z:
+        z.extractall(unzipped)
+    bindir = unzipped / "binaries" / "linux64"
+    (bindir / "BeamBody.so").rename(bindir / real)
+    cmd = ["cc", "-std=c11", "-O1", "-Wall", "-Wextra", "-Werror", "-shared", "-fPIC",
+           f'-DREAL_LIBRARY="{real}"', "-o", str(bindir / "BeamBody.so"), str(TRACE_SHIM_C),
+           f"-L{bindir}", "-Wl,--no-as-needed", f"-l:{real}", "-Wl,-rpath,$ORIGIN", "-ldl"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        pytest.fail(f"compiling the tracing shim failed:\n{' '.join(cmd)}\n{proc.stderr}", pytrace=False)
+    out = workdir / "BeamBody.fmu"
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
+        for f in sorted(unzipped.rglob("*")):
+            if f.is_file():
+                z.write(f, f.relative_to(unzipped).as_posix())
+    return out
+
+
+@dataclass
+class Call:
+    """One line of a trace: the FMU's message about one call, `<function>: <text>`."""
+
+    instance: str
+    status: int
+    category: str
+    function: str
+    text: str
+
+
+def read_trace(path: Path) -> list[Call]:
+    """The lines a traced FMU wrote (see trace_shim.c), as Calls."""
+    calls = []
+    for line in Path(path).read_text(encoding="utf-8").splitlines():
+        instance, status, category, message = line.split("\t", 3)
+        function, _, text = message.partition(": ")
+        calls.append(Call(instance, int(status), category, function, text))
+    return calls
+
+
+_LISTED = re.compile(r"`(\w+)` \((\d+)\) = ([^,]+)")
+_SETUP = re.compile(
+    r"Setup \{ tolerance: (None|Some\((.+?)\)), start_time: (.+?), stop_time: (None|Some\((.+?)\)) \}"
+)
+
+
+def listed(call: Call) -> dict[str, str]:
+    """The variables of a traced set or get call: {name: value as the FMU printed it}."""
+    return {name: value for name, _vr, value in _LISTED.findall(call.text)}
+
+
+def setup_of(call: Call):
+    """(tolerance, startTime, stopTime) of a traced fmi2SetupExperiment; None where undefined."""
+    m = _SETUP.fullmatch(call.text)
+    assert m, f"unexpected fmi2SetupExperiment trace: {call.text!r}"
+    tol, start, stop = m.group(2), m.group(3), m.group(5)
+    return (None if tol is None else float(tol), float(start), None if stop is None else float(stop))
+
+
+def steps_of(calls: list[Call]):
+    """The traced steps, (tc, h, phi) each: fmi2DoStep's arguments and the value of the last
+    fmi2SetReal of `phi` since the previous step (None if phi was not set). Rust prints each f64 as
+    the shortest decimal that reads back to it, so these are the host's values bit for bit."""
+    steps, phi = [], None
+    for c in calls:
+        if c.function == "fmi2SetReal" and "phi" in listed(c):
+            phi = float(listed(c)["phi"])
+        elif c.function == "fmi2DoStep":
+            m = re.fullmatch(r"tc = (\S+), h = (\S+)", c.text)
+            assert m, f"unexpected fmi2DoStep trace: {c.text!r}"
+            steps.append((float(m.group(1)), float(m.group(2)), phi))
+            phi = None
+    return steps
 
 
 # --------------------------------------------------------------------------------------------------

@@ -36,8 +36,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from c_host_util import (CYCLES, H, N_STEPS, STATES, THREADS, compile_host, host_failure, missing_tool,
-                         parse_summary, read_trajectory, run_host)
+from c_host_util import (CYCLES, H, N_STEPS, STATES, THREADS, compile_host, host_failure, parse_summary,
+                         read_trajectory, run_host)
+from fmu_util import missing_tool
 
 K_SAVE = 50  # t = 0.5 s: mid-turn, the integrator's history full, the law still varying
 
