@@ -1,7 +1,7 @@
 """Helpers shared by the C-host tests (test_c_host.py: native and valgrind; test_c_host_platforms.py:
 Windows under wine, Linux aarch64 under qemu, and bit-identity across platforms).
 
-- the host's source, its constants (host.c: H, N_STEPS, T_END) and the default check counts;
+- the host's source, its constants (host.c: H, N_STEPS) and the default check counts;
 - compiling it with a given C compiler, warnings as errors;
 - running it with a time limit, and its `<what> key=value ...` summary lines;
 - reading its trajectory CSV (-o), with the exact bits of every value.
@@ -9,15 +9,13 @@ Windows under wine, Linux aarch64 under qemu, and bit-identity across platforms)
 
 from __future__ import annotations
 
-import os
 import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
-import pytest
 
-from fmu_util import REPO, STATES, T_END  # noqa: F401 (the host runs the paper's scene)
+from fmu_util import REPO, STATES
 
 HOST_DIR = REPO / "tests" / "c_host"
 HOST_C = HOST_DIR / "host.c"

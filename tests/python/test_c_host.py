@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from c_host_util import (CYCLES, H, N_STEPS, T_END, THREADS, host_failure, parse_summary,
+from c_host_util import (CYCLES, H, N_STEPS, THREADS, host_failure, parse_summary,
                          read_trajectory, run_host)
-from fmu_util import PHI_SOURCE_LAW, Slave, cli, missing_tool
+from fmu_util import PHI_SOURCE_LAW, T_END, Slave, cli, missing_tool
 
 RTOL = 1e-6  # the FMU's default tolerance (DefaultExperiment) and the CLI's default rtol
 K_TOL = 1000.0  # see the module docstring
