@@ -64,8 +64,9 @@ def fmu_path() -> Path:
 def law(t: float, t_rot: float = T_ROT, phi_end: float = PHI_END, phi0: float = 0.0):
     """(phi, dphi, ddphi) of the paper's law at t: phi0 + phi_end*sin^2(pi t/(2 t_rot)) for t < t_rot,
     phi0 + phi_end after (the piece that starts at t, as PaperLaw::piece_from). Same expression as the
-    Rust code (0.5*phi_end*(1 - cos(w t)), w = pi/t_rot) with libm's sin/cos (math, not numpy), so the
-    values are those the CLI uses."""
+    Rust code (0.5*phi_end*(1 - cos(w t)), w = pi/t_rot), but with this platform's sin/cos (Python's
+    math: glibc here), while the model uses its own (src/math.rs, the libm crate): the two agree to an
+    ulp or two, not always bit for bit. Where a test needs the model's own bits, use cli_law."""
     t = float(t)
     if t < t_rot:
         w = math.pi / t_rot
@@ -88,11 +89,11 @@ def comm_grid(h: float, t_end: float = T_END) -> np.ndarray:
     return np.arange(n + 1, dtype=float) * h
 
 
-def law_table(h: float, t_end: float = T_END) -> np.ndarray:
+def law_table(h: float, t_end: float = T_END, phi_fn=law) -> np.ndarray:
     """The input table for simulate_fmu: ('time', 'phi') exactly on the communication grid, so FMPy's
     linear interpolation returns the sample itself at every communication point."""
     t = comm_grid(h, t_end)
-    phi = np.array([law(x)[0] for x in t])
+    phi = np.array([phi_fn(x)[0] for x in t])
     return np.array(list(zip(t, phi)), dtype=[("time", np.float64), ("phi", np.float64)])
 
 
@@ -115,6 +116,25 @@ def cli(binary: Path, **sets) -> dict:
             args += ["--set", f"{k}={v!r}" if isinstance(v, float) else f"{k}={v}"]
         _CLI_CACHE[key] = read_csv(run_cli(binary, args))
     return _CLI_CACHE[key]
+
+
+def cli_law(binary: Path, h: float):
+    """The law exactly as the model evaluates it (its own sin and cos), sampled by the CLI on the grid
+    k*h: a function of those times only, (phi, dphi, ddphi) at t = k*h. The CLI's CSV round-trips every
+    value, and its feeds (phi_feed = values | derivatives) sample the same law at the same points. From
+    t_rot on, the law is the hold piece (phi_end, 0, 0) (the piece that starts at t, as law()), with no
+    sine to evaluate; an output row at exactly t_rot shows the turn's one-sided values instead."""
+    c = cli(binary, dt_out=h)
+    rows = np.c_[c["phi"], c["dphi"], c["ddphi"]]
+
+    def at(t: float):
+        k = int(round(t / h))
+        assert abs(k * h - t) <= 1e-12 * max(1.0, t), f"t = {t} is not on the grid k*{h}"
+        if t >= T_ROT:
+            return (PHI_END, 0.0, 0.0)
+        return tuple(float(x) for x in rows[k])
+
+    return at
 
 
 # --------------------------------------------------------------------------------------------------

@@ -7,9 +7,10 @@ Two kinds of check:
 - against the exact law (the CLI with the law itself at rtol 1e-12): the error of the reconstruction, its
   convergence in the communication step H and its observed order log2(e(H)/e(H/2)).
 
-The input samples are the law evaluated as the Rust model evaluates it (fmu_util.law), and the table is
-exactly on the communication grid, so FMPy's linear interpolation hands the FMU the sample itself.
-test_law_samples_are_the_clis checks that these samples are the CLI's, bit for bit.
+The input samples are the law exactly as the Rust model evaluates it (fmu_util.cli_law: the CLI's own
+samples on the grid), and the table is exactly on the communication grid, so FMPy's linear interpolation
+hands the FMU the sample itself. test_law_samples_are_the_clis checks that these are the paper's law, and
+that Python's own evaluation (fmu_util.law, with the platform's sin and cos) agrees to an ulp or two.
 
 Figures go to target/fmu-report.txt.
 """
@@ -29,6 +30,7 @@ from fmu_util import (
     T_ROT,
     Slave,
     cli,
+    cli_law,
     comm_grid,
     law,
     law_sin2,
@@ -69,13 +71,13 @@ SMOOTH_PART_RATIO = 3.0
 _SIM: dict = {}
 
 
-def simulate_values(fmu_dir, h, degree=3):
+def simulate_values(fmu_dir, beam_body, h, degree=3):
     """simulate_fmu with the law's values on the grid k*h as the input table (memoised)."""
     key = (h, degree)
     if key not in _SIM:
         _SIM[key] = fmpy.simulate_fmu(
             str(fmu_dir),
-            input=law_table(h),
+            input=law_table(h, phi_fn=cli_law(beam_body, h)),
             start_values={"phi_extrapolation": degree},  # phi_source: the default, input
             relative_tolerance=RTOL,
             output_interval=h,
@@ -103,31 +105,36 @@ def orders(errors):
 
 
 def test_law_samples_are_the_clis(beam_body, fmu_report):
-    """The input samples (fmu_util.law) equal the CLI's law bit for bit on the finest grid, and the law
-    is the paper's pi*sin^2(pi t/(2*0.85)) to rounding."""
+    """The input samples (the CLI's own law, fmu_util.cli_law) are the paper's pi*sin^2(pi t/(2*0.85)) to
+    rounding on the finest grid, and Python's evaluation of the same expression with the platform's sin
+    and cos (fmu_util.law) agrees with them to a few ulps of each column's scale: the model's sin and cos
+    (the libm crate) are not glibc's, bit for bit, which is why the same-feed tests take the CLI's."""
     h = HS[-1]
-    c = cli(beam_body, rtol=1e-6, dt_out=h)
+    c = cli(beam_body, dt_out=h)
     t = c["t"]
-    ours = np.array([law(x) for x in t])
     assert np.array_equal(t, comm_grid(h)[:-1].tolist() + [T_END]), "the CLI's grid is not k*h"
-    n_phi = int(np.count_nonzero(ours[:, 0] != c["phi"]))
+    model = np.array([cli_law(beam_body, h)(x) for x in comm_grid(h)])
+    python = np.array([law(x) for x in t])
     # at t = t_rot the CLI's columns show the turn's one-sided derivatives; the grid does not hit it
     away = np.abs(t - T_ROT) > 1e-12
-    n_d = int(np.count_nonzero((ours[away, 1:] != np.c_[c["dphi"], c["ddphi"]][away])))
-    sin2 = float(np.max(np.abs(law_sin2(t) - ours[:, 0])))
-    fmu_report.figure("input", "law_samples_differing_from_cli", n_phi + n_d, f"of {3 * len(t)}; |law - pi sin^2| max {sin2:.1e}")
-    assert n_phi == 0 and n_d == 0, (
-        f"{n_phi} phi and {n_d} phi'/phi'' samples differ from the CLI's: libm differs between Python and "
-        "Rust here, and the same-feed comparisons below cannot be to rounding"
+    scale = np.max(np.abs(model), axis=0)
+    ulps = np.max(np.abs(python[away] - model[away]), axis=0) / (np.finfo(float).eps * scale)
+    n_diff = int(np.count_nonzero(python[away] != model[away]))
+    sin2 = float(np.max(np.abs(law_sin2(t) - model[:, 0])))
+    fmu_report.figure(
+        "input", "law_samples_python_vs_model", n_diff,
+        f"of {3 * int(np.count_nonzero(away))} differ, by at most {max(ulps):.2f} eps*scale; "
+        f"|model - pi sin^2| max {sin2:.1e}",
     )
     assert sin2 <= 4 * np.finfo(float).eps * math.pi
+    assert max(ulps) <= 4.0, f"Python's law and the model's differ by {ulps} eps*scale (phi, phi', phi'')"
 
 
 @pytest.mark.parametrize("k", range(HALVINGS))
 def test_values_input_matches_cli_same_feed(fmu_unzipdir, beam_body, fmu_report, k):
     """(a) values only, communication step H: the FMU equals the CLI with phi_feed=values, dt_comm=H."""
     h = HS[k]
-    r = simulate_values(fmu_unzipdir, h)
+    r = simulate_values(fmu_unzipdir, beam_body, h)
     assert len(r) == int(round(T_END / h)) + 1, f"simulate_fmu stopped early at t = {r['time'][-1]}"
     rows = on_paper_grid(r, h)
     c = cli(beam_body, rtol=RTOL, phi_feed="values", dt_comm=h)
@@ -146,7 +153,7 @@ def test_values_input_converges_to_the_law(fmu_unzipdir, beam_body, fmu_report, 
     early, late = t < 2.0, t >= 2.0
     errors, ratios = [], []
     for h in HS:
-        rows = on_paper_grid(simulate_values(fmu_unzipdir, h, degree), h)
+        rows = on_paper_grid(simulate_values(fmu_unzipdir, beam_body, h, degree), h)
         e, e_early, e_late = err(rows, ref), err(rows, ref, early), err(rows, ref, late)
         errors.append(e)
         ratios.append(e_late / e_early)
@@ -169,17 +176,18 @@ def test_values_input_degrees_rank(fmu_unzipdir, beam_body):
     """At every H, a higher extrapolation degree is not worse: e(3) < e(1) < e(0)."""
     ref = cli(beam_body, rtol=REF_RTOL)
     for h in HS:
-        e = {d: err(on_paper_grid(simulate_values(fmu_unzipdir, h, d), h), ref) for d in (3, 1, 0)}
+        e = {d: err(on_paper_grid(simulate_values(fmu_unzipdir, beam_body, h, d), h), ref) for d in (3, 1, 0)}
         assert e[3] < e[1] < e[0], f"H = {h}: errors by degree {e}"
 
 
-def run_slave_derivatives(fmu_unzipdir, md, h, name):
+def run_slave_derivatives(fmu_unzipdir, md, beam_body, h, name):
     s = Slave(fmu_unzipdir, md, name=name)
+    phi_fn = cli_law(beam_body, h)
     try:
-        s.start(tolerance=RTOL, start_time=0.0, stop_time=T_END, phi0=law(0.0)[0])
+        s.start(tolerance=RTOL, start_time=0.0, stop_time=T_END, phi0=phi_fn(0.0)[0])
         times = comm_grid(h)
         times[-1] = T_END
-        y = run_derivatives(s, times, names=STATES)
+        y = run_derivatives(s, times, names=STATES, phi_fn=phi_fn)
         assert not s.errors(), s.errors()
     finally:
         s.free()
@@ -190,7 +198,7 @@ def run_slave_derivatives(fmu_unzipdir, md, h, name):
 def test_derivatives_input_matches_cli_same_feed(fmu_unzipdir, fmu_model_description, beam_body, fmu_report, h):
     """FMU2Slave: setReal(phi), setRealInputDerivatives orders 1 and 2 (the law's), doStep(tc, H), against
     the CLI with phi_feed=derivatives, dt_comm=H, rtol 1e-10."""
-    times, y = run_slave_derivatives(fmu_unzipdir, fmu_model_description, h, f"derivatives-{h:g}")
+    times, y = run_slave_derivatives(fmu_unzipdir, fmu_model_description, beam_body, h, f"derivatives-{h:g}")
     c = cli(beam_body, rtol=RTOL, phi_feed="derivatives", dt_comm=h, dt_out=h)
     assert len(c["t"]) == len(times) and np.max(np.abs(c["t"] - times)) <= 1e-12
     d = {q: float(np.max(np.abs(y[:, i] - c[q][1:]))) for i, q in enumerate(STATES)}
@@ -206,7 +214,7 @@ def test_derivatives_input_converges_to_the_law(fmu_unzipdir, fmu_model_descript
     ref = cli(beam_body, rtol=REF_RTOL)
     errors = []
     for h in HS[:3]:
-        times, y = run_slave_derivatives(fmu_unzipdir, fmu_model_description, h, f"order-{h:g}")
+        times, y = run_slave_derivatives(fmu_unzipdir, fmu_model_description, beam_body, h, f"order-{h:g}")
         step = int(round(H0 / h))
         rows = {q: np.r_[0.0, y[:, i]][::step] for i, q in enumerate(STATES)}
         e = max(float(np.max(np.abs(rows[q] - ref[q]))) for q in ERR_STATES)
