@@ -1,4 +1,5 @@
-//! Project tasks: `cargo xtask <command>`. See `cargo xtask help`.
+//! Project tasks: `cargo xtask <command>`. See `cargo xtask help`. The alias runs the
+//! launcher (`xtask/launch`) first, which makes sure libclang is installed, then this crate.
 //!
 //! Few dependencies, like rust-analyzer's xtask: the interface tables of the library
 //! (`beam_body::fmi2::variables`), quick-xml, zip, libloading and nalgebra, and diffsol with
@@ -101,6 +102,10 @@ Commands:
             by 1e-3 of the scale or more, or (16) from (15) by 0.5 of it or less;
           - draw docs/figure3.png and docs/model.png (xtask/python/figures.py).
           The claims are tested by `cargo test -p xtask figures` (run by `test`).
+  setup   Make sure xtask can be built: the launcher that `cargo xtask` runs first
+          (xtask/launch) installs libclang-dev with apt-get when libclang is missing
+          and it runs as root on Debian (otherwise it names the package). .ci/run
+          runs it before clippy.
   help    Print this message.
 ";
 
@@ -125,6 +130,8 @@ fn run(args: &[String]) -> Result {
             print!("{HELP}");
             Ok(())
         }
+        // Everything it does today, the launcher did before this process started.
+        "setup" => no_options(command, options),
         "test" => test::run(test::Scope::parse(options)?),
         "gen" => {
             no_options(command, options)?;
