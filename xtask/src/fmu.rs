@@ -16,7 +16,7 @@
 //!    and, with `--all-platforms`, `target/fmu/BeamBody-aarch64-linux.fmu`. When the test
 //!    venv (`target/venv`) exists, FMPy's `validate_fmu` must find no problem in either.
 //! 5. Extract it to `target/fmu/BeamBody/`, load this machine's library there with the
-//!    native host ([`crate::host`]), run the same scene through the FMI 2.0 API with the
+//!    native host ([`crate::import`]), run the same scene through the FMI 2.0 API with the
 //!    built-in law and the DefaultExperiment (`target/fmu/paper_fmu.csv`), check that a
 //!    serialized FMU state restores to a bit-identical continuation, and compare with the
 //!    standalone solver.
@@ -31,7 +31,7 @@ use beam_body::fmi2::variables::{Var, DEFAULT_EXPERIMENT, MODEL_IDENTIFIER, PHI_
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipArchive, ZipWriter};
 
-use crate::host::{Fmu2, Status};
+use crate::import::{Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
 use crate::platforms::{self, Archive};
 use crate::summary::{sig, Table};
 use crate::{
@@ -254,12 +254,6 @@ fn communication_points(start: f64, stop: f64, h: f64) -> Vec<f64> {
 
 fn run_fmu(dir: &Path) -> Result<FmuRun> {
     let fmu = Fmu2::load(dir)?;
-    let version = fmu.version();
-    let types_platform = fmu.types_platform();
-    if version != "2.0" {
-        return Err(format!("fmi2GetVersion returned {version:?}, not \"2.0\"").into());
-    }
-
     let ex = DEFAULT_EXPERIMENT;
     let points = communication_points(ex.start_time, ex.stop_time, ex.step_size);
     let vrs = RECORDED.map(Var::vr);
@@ -271,15 +265,21 @@ fn run_fmu(dir: &Path) -> Result<FmuRun> {
         + 1;
 
     let started = Instant::now();
-    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, true)?;
-    instance.set_integer(&[Var::PhiSource.vr()], &[law])?;
-    instance.setup_experiment(Some(ex.tolerance), ex.start_time, Some(ex.stop_time))?;
-    instance.enter_initialization_mode()?;
-    instance.exit_initialization_mode()?;
+    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false)?;
+    let version = instance.get_version().to_owned();
+    let types_platform = instance.get_types_platform().to_owned();
+    if version != "2.0" {
+        return Err(format!("fmi2GetVersion returned {version:?}, not \"2.0\"").into());
+    }
+    instance.set_integer(&[Var::PhiSource.vr()], &[law]).call("fmi2SetInteger")?;
+    let (tolerance, stop) = (Some(ex.tolerance), Some(ex.stop_time));
+    instance.setup_experiment(tolerance, ex.start_time, stop).call("fmi2SetupExperiment")?;
+    instance.enter_initialization_mode().call("fmi2EnterInitializationMode")?;
+    instance.exit_initialization_mode().call("fmi2ExitInitializationMode")?;
 
-    let read = |instance: &mut crate::host::Instance, t: f64| -> Result<[f64; 4]> {
+    let read = |instance: &mut InstanceCS, t: f64| -> Result<[f64; 4]> {
         let mut values = [0.0; 3];
-        instance.get_real(&vrs, &mut values)?;
+        instance.get_real(&vrs, &mut values).call("fmi2GetReal")?;
         Ok([t, values[0], values[1], values[2]])
     };
 
@@ -288,10 +288,9 @@ fn run_fmu(dir: &Path) -> Result<FmuRun> {
     let mut snapshot = None;
     for (k, pair) in points.windows(2).enumerate() {
         if k == mid {
-            let state = instance.get_fmu_state()?;
-            let bytes = instance.serialize_fmu_state(&state)?;
-            instance.free_fmu_state(state)?;
-            snapshot = Some(bytes);
+            // rust-fmi frees the FMU states when the instance is dropped (no fmi2FreeFMUstate).
+            let state = instance.get_fmu_state().call("fmi2GetFMUstate")?;
+            snapshot = Some(instance.serialize_fmu_state(&state).call("fmi2SerializeFMUstate")?);
         }
         let (tc, h) = (pair[0], pair[1] - pair[0]);
         step(&mut instance, tc, h)?;
@@ -301,9 +300,8 @@ fn run_fmu(dir: &Path) -> Result<FmuRun> {
 
     // The FMU state: restore the serialized snapshot and repeat the second half.
     let bytes = snapshot.ok_or("no FMU state was taken")?;
-    let state = instance.deserialize_fmu_state(&bytes)?;
-    instance.set_fmu_state(&state)?;
-    instance.free_fmu_state(state)?;
+    let state = instance.deserialize_fmu_state(&bytes).call("fmi2DeSerializeFMUstate")?;
+    instance.set_fmu_state(&state).call("fmi2SetFMUstate")?;
     let mut state_mismatch = None;
     for (k, pair) in points.windows(2).enumerate().skip(mid) {
         let (tc, h) = (pair[0], pair[1] - pair[0]);
@@ -320,7 +318,7 @@ fn run_fmu(dir: &Path) -> Result<FmuRun> {
             ));
         }
     }
-    instance.terminate()?;
+    instance.terminate().call("fmi2Terminate")?;
     drop(instance);
 
     Ok(FmuRun {
@@ -336,18 +334,21 @@ fn run_fmu(dir: &Path) -> Result<FmuRun> {
 }
 
 /// One doStep; a Discard is an error here (the paper's scene must run through).
-fn step(instance: &mut crate::host::Instance, tc: f64, h: f64) -> Result {
-    match instance.do_step(tc, h, false)? {
-        Status::Discard => {
-            let reached = instance.last_successful_time()?;
-            let terminated = instance.terminated()?;
-            Err(format!(
+fn step(instance: &mut InstanceCS, tc: f64, h: f64) -> Result {
+    match instance.do_step(tc, h, false) {
+        Err(Fmi2Error::Discard) => {
+            let reached = instance.last_successful_time().call("fmi2GetRealStatus")?;
+            let terminated = instance.terminated().call("fmi2GetBooleanStatus")?;
+            let mut err = format!(
                 "fmi2DoStep({tc}, {h}) returned fmi2Discard: last successful time {reached}, \
                  terminated {terminated}"
-            )
-            .into())
+            );
+            for message in crate::import::take_messages() {
+                err.push_str(&format!("\n  logged: {message}"));
+            }
+            Err(err.into())
         }
-        _ => Ok(()),
+        result => result.call("fmi2DoStep").map(drop),
     }
 }
 

@@ -1,9 +1,10 @@
-//! Project tasks: `cargo xtask <command>`. See `cargo xtask help`. The alias runs the
-//! launcher (`xtask/launch`) first, which makes sure libclang is installed, then this crate.
+//! Project tasks: `cargo xtask <command>`. See `cargo xtask help`.
 //!
-//! Few dependencies, like rust-analyzer's xtask: the interface tables of the library
-//! (`beam_body::fmi2::variables`), quick-xml, zip, libloading and nalgebra, and diffsol with
-//! the feature `bench` only (see Cargo.toml for why each).
+//! The alias runs the launcher (`xtask/launch`) first, which makes sure libclang is there for
+//! fmi-sys's bindgen, then this crate. Its dependencies: the interface tables of the library
+//! (`beam_body::fmi2::variables`), quick-xml, zip, fmi (the native FMI host, with log and
+//! tempfile), libloading and nalgebra, and diffsol with the feature `bench` only (see
+//! Cargo.toml for why each).
 
 // The platform's sin, exp, powf, ... are fine here: xtask computes references, bounds and
 // reports on this machine, while the library uses `beam_body::math` (clippy.toml).
@@ -14,7 +15,7 @@ mod docs;
 mod figures;
 mod fmu;
 mod fuzz;
-mod host;
+mod import;
 mod model_description;
 mod platforms;
 mod progress;

@@ -1,13 +1,17 @@
 //! XML helpers on quick-xml: attribute escaping for the writer, and a minimal element tree
-//! for reading modelDescription.xml back (the parse-back test and the native host's GUID).
+//! for reading modelDescription.xml back (the parse-back test; compiled for the tests only).
 
+#[cfg(test)]
 use quick_xml::events::Event;
+#[cfg(test)]
 use quick_xml::Reader;
 
+#[cfg(test)]
 use crate::Result;
 
 /// One element: its name, attributes in document order, and child elements. Text is not
 /// kept; a modelDescription has none (the reader rejects any that is not whitespace).
+#[cfg(test)]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Element {
     pub name: String,
@@ -15,6 +19,7 @@ pub struct Element {
     pub children: Vec<Element>,
 }
 
+#[cfg(test)]
 impl Element {
     /// Parses a whole document and returns its root element.
     pub fn parse(text: &str) -> Result<Element> {

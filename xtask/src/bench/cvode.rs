@@ -159,6 +159,26 @@ struct Api {
     _lib: Library,
 }
 
+/// The function `name` (NUL-terminated) of `lib`, copied out of its `Symbol`; `None` after
+/// recording the name (without the NUL) in `missing`.
+///
+/// # Safety
+/// `T` must be the function's true C signature, and `lib` must stay loaded while the pointer
+/// is used.
+unsafe fn symbol<T: Copy>(
+    lib: &Library,
+    name: &'static str,
+    missing: &mut Vec<&'static str>,
+) -> Option<T> {
+    match lib.get::<T>(name.as_bytes()) {
+        Ok(symbol) => Some(*symbol),
+        Err(_) => {
+            missing.push(name.trim_end_matches('\0'));
+            None
+        }
+    }
+}
+
 impl Api {
     fn load() -> Result<Api, String> {
         let custom = std::env::var(LIBRARY_VARIABLE).ok().filter(|p| !p.is_empty());
@@ -211,7 +231,7 @@ impl Api {
         // and `Api` keeps `lib` loaded for as long as it holds them.
         macro_rules! sym {
             ($name:literal) => {
-                unsafe { crate::host::symbol(&lib, concat!($name, "\0"), &mut missing) }
+                unsafe { symbol(&lib, concat!($name, "\0"), &mut missing) }
             };
         }
         let api = (|| {

@@ -1,5 +1,5 @@
 //! Solver `fmu`: the packaged FMU (`target/fmu/BeamBody.fmu`, extracted to
-//! `target/bench/fmu/BeamBody/`) driven by the native host ([`crate::host`]) with φ from the
+//! `target/bench/fmu/BeamBody/`) driven by the native host ([`crate::import`]) with φ from the
 //! built-in law (phi_source = law), tolerance = the case's rtol (fmi2SetupExperiment), and
 //! fmi2DoStep at a constant communication step H from 0 to t_end.
 //!
@@ -17,7 +17,7 @@ use beam_body::sim::Scene;
 use zip::ZipArchive;
 
 use super::problem::{Counters, Outcome, Problem};
-use crate::host::{Fmu2, Instance, Status};
+use crate::import::{Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
 use crate::{relative, target_dir, Result};
 
 /// Where `cargo xtask bench` extracts the FMU and `bench-run` loads it from.
@@ -69,10 +69,11 @@ pub fn run(
 }
 
 /// Sets the scene's formulation, φ source (`"law"` or `"input"`), model parameters and law.
-pub fn set_scene(instance: &mut Instance, scene: &Scene, phi_source: &str) -> Result {
+pub fn set_scene(instance: &mut InstanceCS, scene: &Scene, phi_source: &str) -> Result {
     let source = item(PHI_SOURCE_TYPE.items, phi_source)?;
     let formulation = item(FORMULATION_TYPE.items, &scene.formulation.name().replace('-', "_"))?;
-    instance.set_integer(&[Var::PhiSource.vr(), Var::Formulation.vr()], &[source, formulation])?;
+    let vrs = [Var::PhiSource.vr(), Var::Formulation.vr()];
+    instance.set_integer(&vrs, &[source, formulation]).call("fmi2SetInteger")?;
     let p = &scene.params;
     let reals = [
         (Var::L, p.l),
@@ -87,7 +88,7 @@ pub fn set_scene(instance: &mut Instance, scene: &Scene, phi_source: &str) -> Re
     ];
     let vrs: Vec<u32> = reals.iter().map(|(v, _)| v.vr()).collect();
     let values: Vec<f64> = reals.iter().map(|(_, x)| *x).collect();
-    instance.set_real(&vrs, &values)?;
+    instance.set_real(&vrs, &values).call("fmi2SetReal")?;
     Ok(())
 }
 
@@ -133,16 +134,17 @@ fn solve(fmu: &Fmu2, problem: &Problem, rtol: f64, h: f64) -> Result<Outcome> {
     let scene = &problem.scene;
     let (points, at_grid) = communication_points(&problem.grid, h)?;
     let vrs = state_vrs(scene.formulation);
-    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, false)?;
+    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false)?;
     set_scene(&mut instance, scene, "law")?;
-    instance.setup_experiment(Some(rtol), points[0], Some(*points.last().unwrap_or(&0.0)))?;
-    instance.enter_initialization_mode()?;
-    instance.exit_initialization_mode()?;
+    let stop = Some(*points.last().unwrap_or(&0.0));
+    instance.setup_experiment(Some(rtol), points[0], stop).call("fmi2SetupExperiment")?;
+    instance.enter_initialization_mode().call("fmi2EnterInitializationMode")?;
+    instance.exit_initialization_mode().call("fmi2ExitInitializationMode")?;
 
     let mut states = Vec::with_capacity(problem.grid.len());
-    let mut read = |instance: &mut Instance| -> Result {
+    let mut read = |instance: &mut InstanceCS| -> Result {
         let mut row = vec![0.0; vrs.len()];
-        instance.get_real(&vrs, &mut row)?;
+        instance.get_real(&vrs, &mut row).call("fmi2GetReal")?;
         states.push(row);
         Ok(())
     };
@@ -150,16 +152,19 @@ fn solve(fmu: &Fmu2, problem: &Problem, rtol: f64, h: f64) -> Result<Outcome> {
     let mut next_grid = at_grid.iter().skip(1).peekable();
     for (k, pair) in points.windows(2).enumerate() {
         let (tc, step) = (pair[0], pair[1] - pair[0]);
-        if let Status::Discard = instance.do_step(tc, step, true)? {
-            let reached = instance.last_successful_time()?;
-            return Err(format!("fmi2DoStep({tc}; {step}) discarded at t = {reached}").into());
-        }
+        match instance.do_step(tc, step, true) {
+            Err(Fmi2Error::Discard) => {
+                let reached = instance.last_successful_time().call("fmi2GetRealStatus")?;
+                return Err(format!("fmi2DoStep({tc}; {step}) discarded at t = {reached}").into());
+            }
+            result => result.call("fmi2DoStep")?,
+        };
         if next_grid.peek() == Some(&&(k + 1)) {
             read(&mut instance)?;
             next_grid.next();
         }
     }
-    instance.terminate()?;
+    instance.terminate().call("fmi2Terminate")?;
     drop(instance);
     Ok(Outcome { states, counters: Counters::default() })
 }

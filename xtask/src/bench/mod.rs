@@ -545,7 +545,7 @@ pub fn run_round(round: u64) -> Result {
 fn timed_solve(
     case: &Case,
     problem: &Problem,
-    fmu: Option<&std::result::Result<crate::host::Fmu2, String>>,
+    fmu: Option<&std::result::Result<crate::import::Fmu2, String>>,
 ) -> (Duration, std::result::Result<Outcome, String>) {
     let number = |name: &str, text: &str| -> std::result::Result<f64, String> {
         text.parse::<f64>()

@@ -1,5 +1,5 @@
 //! The sweep's cases that go through the packaged FMU (`target/sweep/fmu/BeamBody/`, loaded
-//! by the native host): communication steps from 1e-6 s to 10 s with φ from the law, and a
+//! by the native host, [`crate::import`]): communication steps from 1e-6 s to 10 s with φ from the law, and a
 //! step in the φ input.
 
 use std::path::PathBuf;
@@ -8,7 +8,7 @@ use beam_body::fmi2::variables::{Var, MODEL_IDENTIFIER};
 use beam_body::sim::Scene;
 
 use crate::bench::fmu::set_scene;
-use crate::host::{Fmu2, Status};
+use crate::import::{take_messages, Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
 use crate::target_dir;
 
 /// How φ reaches the FMU.
@@ -43,17 +43,18 @@ pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<[f64; 4]>, String> {
         FmuPhi::Step { .. } => "input",
     };
     let text = |e: Box<dyn std::error::Error>| e.to_string();
-    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false, false).map_err(text)?;
+    let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false).map_err(text)?;
     set_scene(&mut instance, scene, source).map_err(text)?;
     let n = (scene.t_end / how.h).round() as u64;
-    instance.setup_experiment(Some(scene.solver.rtol), 0.0, None).map_err(text)?;
-    instance.enter_initialization_mode().map_err(text)?;
-    instance.exit_initialization_mode().map_err(text)?;
+    let rtol = Some(scene.solver.rtol);
+    instance.setup_experiment(rtol, 0.0, None).call("fmi2SetupExperiment").map_err(text)?;
+    instance.enter_initialization_mode().call("fmi2EnterInitializationMode").map_err(text)?;
+    instance.exit_initialization_mode().call("fmi2ExitInitializationMode").map_err(text)?;
     let states = [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1].map(|v| v.vr());
     let mut out = Vec::new();
-    let mut record = |instance: &mut crate::host::Instance| -> Result<(), String> {
+    let mut record = |instance: &mut InstanceCS| -> Result<(), String> {
         let mut y = [0.0; 4];
-        instance.get_real(&states, &mut y).map_err(|e| e.to_string())?;
+        instance.get_real(&states, &mut y).call("fmi2GetReal").map_err(text)?;
         out.push(y);
         Ok(())
     };
@@ -62,20 +63,21 @@ pub fn run(scene: &Scene, how: &FmuRun) -> Result<Vec<[f64; 4]>, String> {
         let tc = k as f64 * how.h;
         if let FmuPhi::Step { t_jump, jump } = how.phi {
             let phi = if tc >= t_jump { jump } else { 0.0 };
-            instance.set_real(&[Var::Phi.vr()], &[phi]).map_err(text)?;
+            instance.set_real(&[Var::Phi.vr()], &[phi]).call("fmi2SetReal").map_err(text)?;
         }
-        let status = instance.do_step(tc, how.h, true).map_err(text)?;
-        if matches!(status, Status::Discard) {
-            let message = instance
-                .messages()
-                .last()
-                .map_or_else(|| "fmi2Discard without a message".to_string(), |m| m.to_string());
-            return Err(message);
-        }
+        match instance.do_step(tc, how.h, true) {
+            Err(Fmi2Error::Discard) => {
+                let message = take_messages().pop();
+                return Err(
+                    message.map_or("fmi2Discard without a message".into(), |m| m.to_string())
+                );
+            }
+            result => result.call("fmi2DoStep").map_err(text)?,
+        };
         if (k + 1) % how.stride as u64 == 0 {
             record(&mut instance)?;
         }
     }
-    instance.terminate().map_err(text)?;
+    instance.terminate().call("fmi2Terminate").map_err(text)?;
     Ok(out)
 }
