@@ -154,7 +154,7 @@ fn package(binaries: &[(&str, &Path)], fmu: &Path) -> Result {
     let file =
         fs::File::create(fmu).map_err(|err| format!("cannot create {}: {err}", relative(fmu)))?;
     let mut zip = ZipWriter::new(file);
-    let deflated = SimpleFileOptions::default().compression_method(CompressionMethod::Deflated);
+    let deflated = SimpleFileOptions::DEFAULT.compression_method(CompressionMethod::Deflated);
     let files = deflated.unix_permissions(0o644);
     let executables = deflated.unix_permissions(0o755);
     let write_all = |zip: &mut ZipWriter<fs::File>| -> zip::result::ZipResult<()> {
