@@ -103,10 +103,12 @@ Commands:
             by 1e-3 of the scale or more, or (16) from (15) by 0.5 of it or less;
           - draw docs/figure3.png and docs/model.png (xtask/python/figures.py).
           The claims are tested by `cargo test -p xtask figures` (run by `test`).
-  setup   Make sure xtask can be built: the launcher that `cargo xtask` runs first
-          (xtask/launch) installs libclang-dev with apt-get when libclang is missing
-          and it runs as root on Debian (otherwise it names the package). .ci/run
-          runs it before clippy.
+  setup   Install what the build and the whole suite need beyond Rust and Python:
+          the launcher that `cargo xtask` runs first (xtask/launch) installs
+          libclang-dev (bindgen in fmi-sys) when libclang is missing; then the Debian
+          packages of `test` (cc, g++, valgrind; the cross toolchains of
+          `fmu --all-platforms`; wine, qemu-user, libtbb12), with apt-get when running
+          as root (otherwise it names them). .ci/run runs it before clippy.
   help    Print this message.
 ";
 
@@ -132,7 +134,10 @@ fn run(args: &[String]) -> Result {
             Ok(())
         }
         // Everything it does today, the launcher did before this process started.
-        "setup" => no_options(command, options),
+        "setup" => {
+            no_options(command, options)?;
+            test::system_packages()
+        }
         "test" => test::run(test::Scope::parse(options)?),
         "gen" => {
             no_options(command, options)?;

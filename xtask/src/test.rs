@@ -59,7 +59,7 @@ pub fn run(scope: Scope) -> Result {
 }
 
 /// Installs the system packages the suite needs (apt-get as root on Debian), or names them.
-fn system_packages() -> Result {
+pub fn system_packages() -> Result {
     use crate::system::{ensure, CROSS_TOOLCHAINS, FOREIGN_RUNNERS, TEST_TOOLS};
     ensure("cargo xtask test", &[TEST_TOOLS, CROSS_TOOLCHAINS, FOREIGN_RUNNERS])
 }
