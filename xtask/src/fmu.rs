@@ -53,12 +53,18 @@ pub struct Packages {
 }
 
 /// Checks the modelDescription, builds the cdylib (with `all`, for every platform) and zips
-/// the archives of [`platforms::ARCHIVES`] (without `all`: [`platforms::HOST_ARCHIVE`]).
+/// the archives of [`platforms::ARCHIVES`] (without `all`: [`platforms::HOST_ARCHIVE`]) into
+/// `target/fmu/`.
 pub fn build_package(all: bool) -> Result<Packages> {
+    build_package_in(&target_dir().join("fmu"), all)
+}
+
+/// [`build_package`] into `out_dir`: the benchmark and the sweep package this machine's FMU
+/// apart, so that they leave `target/fmu/` (all platforms after `cargo xtask test`) alone.
+pub fn build_package_in(out_dir: &Path, all: bool) -> Result<Packages> {
     model_description::check_fresh()?;
-    let out_dir = target_dir().join("fmu");
-    fs::create_dir_all(&out_dir)
-        .map_err(|err| format!("cannot create {}: {err}", relative(&out_dir)))?;
+    fs::create_dir_all(out_dir)
+        .map_err(|err| format!("cannot create {}: {err}", relative(out_dir)))?;
     let built = platforms::build(all)?;
     let archives: &[Archive] =
         if all { &platforms::ARCHIVES } else { std::slice::from_ref(&platforms::HOST_ARCHIVE) };
@@ -214,7 +220,7 @@ fn validate_with_fmpy(fmu: &Path) -> Result {
 
 /// Extracts the .fmu into a clean `dir`, which the host then loads: the run uses exactly
 /// the packaged files.
-fn extract(fmu: &Path, dir: &Path) -> Result {
+pub fn extract(fmu: &Path, dir: &Path) -> Result {
     if dir.exists() {
         fs::remove_dir_all(dir).map_err(|err| format!("cannot remove {}: {err}", relative(dir)))?;
     }

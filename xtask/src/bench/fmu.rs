@@ -8,13 +8,11 @@
 //! is the cost of the FMI layer and of the steps shortened to land. FMI reports no work
 //! counters, so they stay empty.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 
 use beam_body::fmi2::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
 use beam_body::model::Formulation;
 use beam_body::sim::Scene;
-use zip::ZipArchive;
 
 use super::problem::{Counters, Outcome, Problem};
 use crate::import::{Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
@@ -31,20 +29,12 @@ pub fn prepare() -> Result<PathBuf> {
     prepare_at(extracted_dir())
 }
 
-/// Builds and packages the FMU and extracts it to a clean `dir`.
+/// Builds and packages this machine's FMU next to `dir` (`dir`.fmu) and extracts it to a clean
+/// `dir`.
 pub fn prepare_at(dir: PathBuf) -> Result<PathBuf> {
-    let fmu = crate::fmu::build_package(false)?.main;
-    if dir.exists() {
-        fs::remove_dir_all(&dir)
-            .map_err(|err| format!("cannot remove {}: {err}", relative(&dir)))?;
-    }
-    let file =
-        fs::File::open(&fmu).map_err(|err| format!("cannot open {}: {err}", relative(&fmu)))?;
-    let mut archive =
-        ZipArchive::new(file).map_err(|err| format!("{} is not a zip: {err}", relative(&fmu)))?;
-    archive
-        .extract(&dir)
-        .map_err(|err| format!("cannot extract {} to {}: {err}", relative(&fmu), relative(&dir)))?;
+    let out_dir = dir.parent().ok_or_else(|| format!("{} has no parent", relative(&dir)))?;
+    let fmu = crate::fmu::build_package_in(out_dir, false)?.main;
+    crate::fmu::extract(&fmu, &dir)?;
     Ok(dir)
 }
 
