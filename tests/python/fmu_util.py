@@ -309,6 +309,30 @@ def replay(unzipdir, model_description, steps, name, names=STATES):
         s.free()
 
 
+def assert_host_matches_fmpy(host: str, run: dict, steps, unzipdir, model_description, report,
+                             rtol: float, k_grid: float):
+    """A host's run of the paper's scene with phi as an input ({'t', 'y', 'wall'}, y: STATES after
+    each step) against FMPy's FMU2Slave replaying the host's own `steps` (tc, h, phi): bit for bit;
+    and against FMPy on the plain grid (tc = k*H0, h = H0), for scale: within k_grid*rtol*max|y| per
+    state (the global error of the tolerance; a different tc changes the step sequence)."""
+    n = len(steps)
+    assert np.allclose(run["t"], H0 * np.arange(1, n + 1), rtol=0, atol=1e-12), f"{host}'s time"
+    assert np.all(np.isfinite(run["y"])) and np.max(np.abs(run["y"][:, 0])) > 0.1, f"{host}'s run did not move"
+    y, wall_fmpy = replay(unzipdir, model_description, steps, f"{host}-fmpy")
+    grid = [(k * H0, H0, law(k * H0)[0]) for k in range(n)]
+    y_grid, _ = replay(unzipdir, model_description, grid, f"{host}-fmpy-grid")
+
+    report.figure(host, "wall_s", run["wall"], f"{n} steps; FMPy's FMU2Slave: {wall_fmpy:.3f} s")
+    for j, q in enumerate(STATES):
+        d = float(np.max(np.abs(run["y"][:, j] - y[:, j])))
+        scale = rtol * float(np.max(np.abs(y[:, j])))
+        k = float(np.max(np.abs(run["y"][:, j] - y_grid[:, j]))) / scale
+        comment = f"same calls; FMPy on tc = k*{H0}: {k * scale:.3e} = {k:.0f} rtol*max|y|"
+        report.figure(host, f"max|{host}-FMPy| {q}", d, comment)
+        assert d == 0.0, f"{q}: {host} and FMPy making the same calls differ by {d}"
+        assert k <= k_grid, f"{q}: {host} vs FMPy on the plain grid differ by {k:.0f} rtol*max|y|"
+
+
 # --------------------------------------------------------------------------------------------------
 # hosts written by others: the calls they make
 # --------------------------------------------------------------------------------------------------

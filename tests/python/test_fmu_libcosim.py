@@ -48,7 +48,8 @@ import time
 import numpy as np
 import pytest
 
-from fmu_util import H0, STATES, T_END, law, missing_tool, read_trace, replay, setup_of, steps_of, traced_fmu
+from fmu_util import (H0, STATES, T_END, assert_host_matches_fmpy, law, missing_tool, read_trace, setup_of,
+                      steps_of, traced_fmu)
 
 H_NS = 8_500_000  # the communication step in libcosim's unit, ns
 N_COMM = round(T_END / H0)  # 1200 steps
@@ -150,22 +151,7 @@ def test_libcosim_calls(cosim, fmu_file, fmu_model_description, libcosim_run, tm
 def test_libcosim_matches_fmpy(fmu_unzipdir, fmu_model_description, libcosim_run, fmu_report):
     """libcosim vs FMPy making the same calls: bit for bit. FMPy on the plain grid: within K_GRID
     rtol*max|y|."""
-    r = libcosim_run
-    assert np.allclose(r["t"], H0 * np.arange(1, N_COMM + 1), rtol=0, atol=1e-12), "libcosim's time"
-    assert np.all(np.isfinite(r["y"])) and np.max(np.abs(r["y"][:, 0])) > 0.1, "libcosim's run did not move"
-    y, wall_fmpy = replay(fmu_unzipdir, fmu_model_description, libcosim_steps(), "libcosim-fmpy")
-    grid = [(k * H0, H0, law(k * H0)[0]) for k in range(N_COMM)]
-    y_grid, _ = replay(fmu_unzipdir, fmu_model_description, grid, "libcosim-fmpy-grid")
-
-    fmu_report.figure("libcosim", "wall_s", r["wall"], f"{N_COMM} steps; FMPy's FMU2Slave: {wall_fmpy:.3f} s")
-    for j, q in enumerate(STATES):
-        d = float(np.max(np.abs(r["y"][:, j] - y[:, j])))
-        scale = RTOL * float(np.max(np.abs(y[:, j])))
-        k_grid = float(np.max(np.abs(r["y"][:, j] - y_grid[:, j]))) / scale
-        comment = f"same calls; FMPy on tc = k*0.0085: {k_grid * scale:.3e} = {k_grid:.0f} rtol*max|y|"
-        fmu_report.figure("libcosim", f"max|libcosim-FMPy| {q}", d, comment)
-        assert d == 0.0, f"{q}: libcosim and FMPy making the same calls differ by {d}"
-        assert k_grid <= K_GRID, f"{q}: libcosim vs FMPy on the plain grid differ by {k_grid:.0f} rtol*max|y|"
+    assert_host_matches_fmpy("libcosim", libcosim_run, libcosim_steps(), fmu_unzipdir, fmu_model_description, fmu_report, RTOL, K_GRID)
 
 
 def test_libcosim_enumerations_cannot_be_set(cosim, fmu_file, fmu_model_description, capfd, fmu_report):
