@@ -10,8 +10,9 @@ use super::state;
 use super::variables::{
     BaseType, Causality, Type, Var, Variable, CAPABILITIES, LOG_CATEGORIES, VARIABLES,
 };
-use crate::model::{BeamBody, Formulation, Outputs, PaperLaw, Params, Phi, PhiPiece};
-use crate::model::{TaylorSignal, ValueHistory};
+use crate::model::{
+    BeamBody, Formulation, HostSignal, Interpolation, Outputs, PaperLaw, Params, Sample,
+};
 use crate::sim::{InitialState, Run, SolverOptions};
 use crate::solver::FixedStep;
 use std::fmt;
@@ -134,6 +135,7 @@ pub(super) struct Values {
     pub max_order: i32,
     pub fixed_order: i32,
     pub phi_extrapolation: i32,
+    pub phi_interpolation: Interpolation,
     pub stability_guard: bool,
     pub phi: f64,
 }
@@ -170,6 +172,7 @@ impl Values {
             max_order: 5,
             fixed_order: 2,
             phi_extrapolation: 3,
+            phi_interpolation: Interpolation::Smooth,
             stability_guard: true,
             phi: 0.0,
         };
@@ -241,6 +244,9 @@ impl Values {
                     Var::MaxOrder => self.max_order = k,
                     Var::FixedOrder => self.fixed_order = k,
                     Var::PhiExtrapolation => self.phi_extrapolation = k,
+                    Var::PhiInterpolation => {
+                        self.phi_interpolation = Interpolation::ALL[(k - 1) as usize]
+                    }
                     _ => unreachable!("checked by type"),
                 }
             }
@@ -279,6 +285,10 @@ impl Values {
             Var::MaxOrder => Value::Integer(self.max_order),
             Var::FixedOrder => Value::Integer(self.fixed_order),
             Var::PhiExtrapolation => Value::Integer(self.phi_extrapolation),
+            Var::PhiInterpolation => {
+                let k = Interpolation::ALL.iter().position(|i| *i == self.phi_interpolation);
+                Value::Integer(k.expect("every interpolation is listed") as i32 + 1)
+            }
             Var::StabilityGuard => Value::Boolean(self.stability_guard),
             _ => return None,
         })
@@ -328,8 +338,6 @@ pub struct Core {
     pub(super) setup: Setup,
     /// The integrator, from fmi2ExitInitializationMode on.
     pub(super) run: Option<Run>,
-    /// The input's values at the communication points.
-    pub(super) history: ValueHistory,
     /// φ' and φ'' sent for the next step only.
     pub(super) pending: [Option<f64>; 2],
     /// The communication time: the start time, then the end of the last step.
@@ -348,7 +356,6 @@ impl Core {
             values: Values::from_table(),
             setup: Setup { tolerance: None, start_time: 0.0, stop_time: None },
             run: None,
-            history: ValueHistory::default(),
             pending: [None, None],
             time: 0.0,
             last_successful_time: 0.0,
@@ -357,20 +364,10 @@ impl Core {
         }
     }
 
-    /// The piece of φ at the start, `t0`.
-    pub(super) fn start_piece(&self, t0: f64) -> PhiPiece {
-        match self.values.phi_source {
-            PhiSource::Law => self.values.law.piece_from(t0),
-            PhiSource::Input => PhiPiece::Taylor(TaylorSignal {
-                t0,
-                at_t0: Phi {
-                    phi: self.values.phi,
-                    dphi: self.pending[0].unwrap_or(0.0),
-                    ddphi: self.pending[1].unwrap_or(0.0),
-                },
-                jerk: 0.0,
-            }),
-        }
+    /// The host's sample of φ at `t`: the input's value and the derivatives sent for the
+    /// next step.
+    pub(super) fn sample(&self, t: f64) -> Sample {
+        Sample { t, phi: self.values.phi, dphi: self.pending[0], ddphi: self.pending[1] }
     }
 
     /// A fresh integrator at the start time, after checking every parameter together.
@@ -378,11 +375,19 @@ impl Core {
         let v = &self.values;
         let model = BeamBody::new(v.params).map_err(|e| e.to_string())?;
         let t0 = self.setup.start_time;
-        let piece = self.start_piece(t0);
-        model.check_start(piece.eval(t0).phi, 0.0, 0.0).map_err(|e| e.to_string())?;
         let options = v.solver_options(self.setup.rtol());
-        Run::new(model, v.formulation, &options, t0, InitialState::default(), piece)
-            .map_err(|e| e.to_string())
+        let init = InitialState::default();
+        let run = match v.phi_source {
+            PhiSource::Law => Run::with_law(model, v.formulation, &options, t0, init, v.law),
+            PhiSource::Input => {
+                let signal = HostSignal::new(v.phi_interpolation, v.phi_extrapolation as usize);
+                Run::with_host(model, v.formulation, &options, t0, init, signal, self.sample(t0))
+            }
+        }
+        .map_err(|e| e.to_string())?;
+        let phi0 = run.piece().eval(t0).phi;
+        run.model().check_start(phi0, 0.0, 0.0).map_err(|e| e.to_string())?;
+        Ok(run)
     }
 }
 
@@ -642,9 +647,7 @@ impl Instance {
         match self.core.build_run() {
             Ok(run) => {
                 let t0 = self.core.setup.start_time;
-                if self.core.values.phi_source == PhiSource::Input {
-                    self.core.history = ValueHistory::default();
-                }
+                self.core.pending = [None, None];
                 self.core.run = Some(run);
                 self.core.time = t0;
                 self.core.last_successful_time = t0;
@@ -1015,55 +1018,11 @@ impl Instance {
             }
         }
         self.trace(format_args!("{F}: tc = {tc}, h = {h}"));
-        let values = self.core.values;
-        let Core { run, history, pending, .. } = &mut self.core;
-        let run = run.as_mut().expect("stepComplete has an integrator");
-        let previous = run.piece();
-        let result = match values.phi_source {
-            PhiSource::Law => {
-                run.advance_law(&values.law, target, target).map_err(|e| e.to_string())
-            }
-            PhiSource::Input => {
-                history.push(tc, values.phi);
-                let signal = if pending.iter().any(Option::is_some) {
-                    Some(TaylorSignal {
-                        t0: tc,
-                        at_t0: Phi {
-                            phi: values.phi,
-                            dphi: pending[0].unwrap_or(0.0),
-                            ddphi: pending[1].unwrap_or(0.0),
-                        },
-                        jerk: 0.0,
-                    })
-                } else {
-                    // `None` when the coefficients are not finite: values so far apart that
-                    // the slopes overflow, or a step so short that h² underflows.
-                    let start = run.piece().eval(tc);
-                    let degree = values.phi_extrapolation as usize;
-                    history.piece(degree, start, h)
-                };
-                *pending = [None, None];
-                match signal {
-                    Some(signal) => run
-                        .switch_piece(PhiPiece::Taylor(signal))
-                        .and_then(|()| run.advance(target, target))
-                        .map_err(|e| e.to_string()),
-                    None => Err(format!(
-                        "the input `phi` over the step is not finite when extrapolated from \
-                         its values (phi = {:?} at t = {tc}, h = {h:?})",
-                        values.phi
-                    )),
-                }
-            }
-        };
-        let result = result.map_err(|e| {
-            if run.t() <= tc {
-                // No step was accepted: the outputs at tc are those of the piece that got
-                // there, not of the rejected one (whose φ'' may be absurd).
-                run.set_piece(previous, false).expect("without a restart nothing can fail");
-            }
-            (e, run.t())
-        });
+        let sample = self.core.sample(tc);
+        self.core.pending = [None, None];
+        let run = self.core.run.as_mut().expect("stepComplete has an integrator");
+        run.set_sample(sample);
+        let result = run.step_to(target).map_err(|e| (e.to_string(), run.t()));
         self.core.cache = None;
         match result {
             Ok(()) => {

@@ -122,7 +122,24 @@ pub const PHI_SOURCE_TYPE: EnumType = EnumType {
     ],
 };
 
-pub const ENUM_TYPES: &[EnumType] = &[FORMULATION_TYPE, PHI_SOURCE_TYPE];
+pub const PHI_INTERPOLATION_TYPE: EnumType = EnumType {
+    name: "PhiInterpolation",
+    description: "How the input phi is interpolated between communication points",
+    items: &[
+        (
+            "smooth",
+            "pieces joined with continuous phi, phi' and phi'' to a target extrapolated from the \
+             last values and sent derivatives; jumps of the signal restart the integrator",
+        ),
+        (
+            "taylor",
+            "FMI's polynomial phi + phi'*s + phi''*s^2/2 from the sent derivatives over each step \
+             (with values only, a cubic to the extrapolated value and slope)",
+        ),
+    ],
+};
+
+pub const ENUM_TYPES: &[EnumType] = &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE];
 
 /// `<LogCategories>`: (name, description). Errors are always logged; the others only when
 /// debug logging is on for them.
@@ -211,6 +228,7 @@ pub enum Var {
     MaxOrder,
     FixedOrder,
     PhiExtrapolation,
+    PhiInterpolation,
     StabilityGuard,
     Phi,
     V1,
@@ -405,6 +423,15 @@ pub const VARIABLES: &[Variable] = &[
         "Degree of the polynomial through the last input values that gives phi over a step \
          when the host sends no derivatives, 0..3",
     ),
+    Variable {
+        var: Var::PhiInterpolation,
+        name: "phi_interpolation",
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        ty: Type::Enumeration { ty: &PHI_INTERPOLATION_TYPE, start: 1 },
+        description: "Interpolation of the input phi between communication points: smooth or \
+                      taylor",
+    },
     Variable {
         var: Var::StabilityGuard,
         name: "stability_guard",

@@ -332,6 +332,30 @@ impl<const N: usize> Bdf<N> {
         (self.q_next, self.h_next)
     }
 
+    /// How much a change of the right-hand side at the current point would matter to the
+    /// next step: ‖h·(f_after − f_before)‖ in the error test's weighted RMS norm, with h the
+    /// step planned next. Above about 1 the change alone would fail the error test, and the
+    /// history would carry it into the steps after; below, the step absorbs it. Two
+    /// evaluations of f. Infinite before the first step (there is no history to keep).
+    pub fn change_of_rhs<A: OdeSystem<N>, B: OdeSystem<N>>(
+        &mut self,
+        before: &A,
+        after: &B,
+    ) -> f64 {
+        if !self.started {
+            return f64::INFINITY;
+        }
+        let (t, y) = (self.t, self.zn[0]);
+        let df = self.eval_rhs(after, t, &y) - self.eval_rhs(before, t, &y);
+        self.update_weights();
+        let norm = self.wrms(&(df * self.h_next.abs()));
+        if norm.is_nan() {
+            f64::INFINITY
+        } else {
+            norm
+        }
+    }
+
     /// The state at `t` inside the last step `[t_n − h_u, t_n]`, from the Nordsieck
     /// polynomial (dense output, CVODE's CVodeGetDky with k = 0).
     pub fn interpolate(&self, t: f64) -> Result<SVector<f64, N>, SolverError> {

@@ -20,6 +20,7 @@ pub use bdf::{Bdf, StepOutcome};
 pub use config::{BdfConfig, FixedStep};
 pub use error::SolverError;
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
+pub(crate) use snapshot::visit_usize;
 pub use snapshot::StateVisitor;
 pub use stats::Stats;
 pub use system::{OdeSystem, RangeViolation};
