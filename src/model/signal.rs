@@ -302,17 +302,12 @@ impl HostSignal {
         }
         // Round-off of a derivative of order r computed from values of size u over spacing
         // h is about eps·u/h^r.
-        let u = self.samples().iter().chain([s]).fold(0.0f64, |m, x| m.max(x.phi.abs()));
-        let du = self
-            .samples()
-            .iter()
-            .chain([s])
-            .fold(0.0f64, |m, x| m.max(x.dphi.unwrap_or(0.0).abs()));
-        let ddu = self
-            .samples()
-            .iter()
-            .chain([s])
-            .fold(0.0f64, |m, x| m.max(x.ddphi.unwrap_or(0.0).abs()));
+        let (mut u, mut du, mut ddu) = (s.phi.abs(), 0.0f64, 0.0f64);
+        for x in self.samples().iter().chain([s]) {
+            u = u.max(x.phi.abs());
+            du = du.max(x.dphi.unwrap_or(0.0).abs());
+            ddu = ddu.max(x.ddphi.unwrap_or(0.0).abs());
+        }
         let scale = [u + du * h + ddu * h * h, u / h + du + ddu * h, u / (h * h) + du / h + ddu];
         let predicted = [current.phi, current.dphi, current.ddphi];
         (0..s.orders()).any(|r| {
@@ -339,24 +334,68 @@ impl HostSignal {
     /// φ, φ′, φ″ at tc + h of the polynomial through the newest samples, and an estimate of
     /// their errors: the change of each when the oldest condition is dropped.
     fn extrapolate(&self, h: f64, derivatives: bool) -> Option<(Phi, [f64; 3])> {
-        let most = if derivatives { MAX_CONDITIONS } else { self.degree + 1 };
-        let (z, c, n) = self.divided_differences(h, derivatives, most);
-        let eval = |m: usize| {
-            let (p, dp, ddp) = newton(&z[..m], &c[..m], 1.0);
-            [p, dp / h, ddp / (h * h)]
-        };
-        let p = eval(n);
-        let target = Phi { phi: p[0], dphi: p[1], ddphi: p[2] };
-        // The last term; infinite with a single condition.
-        let mut error = [f64::INFINITY; 3];
-        if n > 1 {
-            let q = eval(n - 1);
-            for k in 0..3 {
-                let e = (p[k] - q[k]).abs();
-                error[k] = if e.is_nan() { f64::INFINITY } else { e };
+        let (p, q) = match self.quintic(h, derivatives) {
+            Some(pq) => pq,
+            None => {
+                let most = if derivatives { MAX_CONDITIONS } else { self.degree + 1 };
+                let (z, c, n) = self.divided_differences(h, derivatives, most);
+                let eval = |m: usize| {
+                    let (p, dp, ddp) = newton(&z[..m], &c[..m], 1.0);
+                    [p, dp, ddp]
+                };
+                // The last term; infinite with a single condition.
+                let q = if n > 1 { eval(n - 1) } else { [f64::INFINITY; 3] };
+                (eval(n), q)
             }
+        };
+        let scale = [1.0, 1.0 / h, 1.0 / (h * h)];
+        let target = Phi { phi: p[0] * scale[0], dphi: p[1] * scale[1], ddphi: p[2] * scale[2] };
+        let error = [0, 1, 2].map(|k| {
+            let e = (p[k] - q[k]).abs() * scale[k];
+            if e.is_nan() {
+                f64::INFINITY
+            } else {
+                e
+            }
+        });
+        let finite = [target.phi, target.dphi, target.ddphi].iter().all(|x| x.is_finite());
+        finite.then_some((target, error))
+    }
+
+    /// The common case of [`extrapolate`](Self::extrapolate) in closed form: φ, φ′ and φ″ at
+    /// both newest samples. The quintic p(x) = A0 + A1x + A2x² + c3x³ + c4x⁴ + c5x⁵ in the
+    /// scaled time x = (t − tc)/h, from p, p′ and p″/2 at x = 0 (A0, A1, A2) and at x = −d
+    /// (B0, B1, B2), has, with the residuals r0 = B0 − (A0 − A1d + A2d²),
+    /// r1 = B1 − (A1 − 2A2d) and r2 = B2 − A2 (solved with sympy):
+    /// c3 = −(d²r2 + 4dr1 + 10r0)/d³, c4 = −(2d²r2 + 7dr1 + 15r0)/d⁴,
+    /// c5 = −(d²r2 + 3dr1 + 6r0)/d⁵; without the last condition (B2) the quartic has
+    /// c3 = −(dr1 + 4r0)/d³, c4 = −(dr1 + 3r0)/d⁴. Returns p, p′, p″ at x = 1 of both.
+    fn quintic(&self, h: f64, derivatives: bool) -> Option<([f64; 3], [f64; 3])> {
+        let [a, b] = self.history[..2] else { return None };
+        if !derivatives || self.len < 2 || a.orders() < 3 || b.orders() < 3 {
+            return None;
         }
-        p.iter().all(|x| x.is_finite()).then_some((target, error))
+        let d = (a.t - b.t) / h;
+        let (a0, a1, a2) = (a.phi, a.derivative(1) * h, 0.5 * a.derivative(2) * h * h);
+        let (b0, b1, b2) = (b.phi, b.derivative(1) * h, 0.5 * b.derivative(2) * h * h);
+        let r0 = b0 - (a0 - a1 * d + a2 * d * d);
+        let r1 = b1 - (a1 - 2.0 * a2 * d);
+        let r2 = b2 - a2;
+        let (d2, d3) = (d * d, d * d * d);
+        let (d4, d5) = (d2 * d2, d2 * d3);
+        let c3 = -(d2 * r2 + 4.0 * d * r1 + 10.0 * r0) / d3;
+        let c4 = -(2.0 * d2 * r2 + 7.0 * d * r1 + 15.0 * r0) / d4;
+        let c5 = -(d2 * r2 + 3.0 * d * r1 + 6.0 * r0) / d5;
+        let at_one = |c3: f64, c4: f64, c5: f64| {
+            [
+                a0 + a1 + a2 + c3 + c4 + c5,
+                a1 + 2.0 * a2 + 3.0 * c3 + 4.0 * c4 + 5.0 * c5,
+                2.0 * a2 + 6.0 * c3 + 12.0 * c4 + 20.0 * c5,
+            ]
+        };
+        let q3 = -(d * r1 + 4.0 * r0) / d3;
+        let q4 = -(d * r1 + 3.0 * r0) / d4;
+        Some((at_one(c3, c4, c5), at_one(q3, q4, 0.0)))
     }
 
     /// Newton's divided differences of the newest conditions, at most `most`, in the scaled
@@ -371,33 +410,34 @@ impl HostSignal {
     ) -> ([f64; MAX_CONDITIONS], [f64; MAX_CONDITIONS], usize) {
         let tc = self.history[0].t;
         let mut z = [0.0; MAX_CONDITIONS];
-        let mut sample_of = [0usize; MAX_CONDITIONS];
-        let mut n = 0;
-        'fill: for (k, s) in self.samples().iter().enumerate() {
+        // The data of each condition's node, value first: f⁽ʲ⁾·scale^j/j!, the j-th
+        // divided difference on a node repeated j + 1 times (in the scaled time).
+        let mut data = [[0.0; 3]; MAX_CONDITIONS];
+        let (most, mut n) = (most.min(MAX_CONDITIONS), 0);
+        let powers = [1.0, scale, 0.5 * scale * scale];
+        'fill: for s in self.samples() {
             let orders = if derivatives { s.orders() } else { 1 };
+            let node = (s.t - tc) / scale;
+            let d = [s.phi, s.derivative(1) * powers[1], s.derivative(2) * powers[2]];
             for _ in 0..orders {
-                if n == most.min(MAX_CONDITIONS) {
+                if n == most {
                     break 'fill;
                 }
-                z[n] = (s.t - tc) / scale;
-                sample_of[n] = k;
+                z[n] = node;
+                data[n] = d;
                 n += 1;
             }
         }
-        // Column 0: the values; column j: f[z_{i−j}, …, z_i], which on a node repeated j + 1
-        // times is f⁽ʲ⁾/j! (in the scaled time, ×scale^j).
         let mut q = [0.0; MAX_CONDITIONS];
         for i in 0..n {
-            q[i] = self.history[sample_of[i]].phi;
+            q[i] = data[i][0];
         }
         let mut c = [0.0; MAX_CONDITIONS];
         c[0] = q[0];
-        let factorial = [1.0, 1.0, 2.0];
         for j in 1..n {
             for i in (j..n).rev() {
                 q[i] = if z[i] == z[i - j] {
-                    let s = &self.history[sample_of[i]];
-                    s.derivative(j) * math::powi(scale, j as i32) / factorial[j]
+                    data[i][j]
                 } else {
                     (q[i] - q[i - 1]) / (z[i] - z[i - j])
                 };
@@ -542,6 +582,23 @@ mod tests {
         assert!((target.dphi - dp(0.1)).abs() < 1e-12);
         assert!((target.ddphi - ddp(0.1)).abs() < 1e-10);
         assert!(error[2] > 0.0);
+    }
+
+    #[test]
+    fn closed_form_quintic_agrees_with_divided_differences() {
+        let mut sig = smooth(3);
+        sig.push(Sample::with_derivatives(0.3, sine(0.3)));
+        sig.push(Sample::with_derivatives(0.37, sine(0.37)));
+        let h = 0.05;
+        let (p, q) = sig.quintic(h, true).unwrap();
+        let (z, c, n) = sig.divided_differences(h, true, MAX_CONDITIONS);
+        assert_eq!(n, 6);
+        let (p2, q2) = (newton(&z, &c, 1.0), newton(&z[..5], &c[..5], 1.0));
+        for (x, y) in
+            [(p[0], p2.0), (p[1], p2.1), (p[2], p2.2), (q[0], q2.0), (q[1], q2.1), (q[2], q2.2)]
+        {
+            assert!((x - y).abs() < 1e-12 * (1.0 + y.abs()), "{x} vs {y}");
+        }
     }
 
     #[test]

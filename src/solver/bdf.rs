@@ -720,7 +720,12 @@ impl<const N: usize> Bdf<N> {
         self.landing = None;
         let remaining = tstop - self.t;
         if remaining <= h * (1.0 + LANDING_STRETCH) {
-            h = remaining;
+            // A landing step within round-off of the last one keeps its size, so that a run
+            // of equal communication steps keeps equal steps: the coefficients, the
+            // Nordsieck scaling and the Jacobian's γ stay as they are (tc + h computed by a
+            // host differs from step to step in its last bits).
+            let resolution = 4.0 * f64::EPSILON * self.t.abs().max(tstop.abs());
+            h = if (remaining - self.hscale).abs() <= resolution { self.hscale } else { remaining };
             self.landing = Some(tstop);
         }
         if h != self.hscale {
