@@ -24,6 +24,8 @@
 //! assert!(last.v1.abs() < 1.0 && stats.rejected() < stats.steps);
 //! ```
 
+#![deny(unsafe_code)]
+
 pub mod fmi2;
 pub mod math;
 pub mod model;

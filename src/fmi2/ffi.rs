@@ -10,8 +10,11 @@
 //! (FMI 2.0.4): a dozen type aliases and one struct do not justify bindgen and libclang
 //! (ARCHITECTURE.md, "Dependencies").
 #![allow(non_snake_case, non_camel_case_types, non_upper_case_globals)]
+#![allow(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn)]
 
-use super::instance::{Core, Instance, Logger, Status};
+use super::core::Core;
+use super::instance::{Instance, Logger, Status};
 use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -98,7 +101,7 @@ unsafe fn instance<'a>(c: fmi2Component) -> Option<&'a mut Instance> {
     }
     // SAFETY: registered pointers come from Box::into_raw in fmi2Instantiate and are removed
     // before fmi2FreeInstance drops them.
-    Some(&mut *(c as *mut Instance))
+    Some(unsafe { &mut *(c as *mut Instance) })
 }
 
 /// The snapshot behind `s`, if `s` is a live FMU state of this library.
@@ -107,7 +110,7 @@ unsafe fn snapshot<'a>(s: fmi2FMUstate) -> Option<&'a mut Core> {
         return None;
     }
     // SAFETY: registered pointers come from Box::into_raw in this module.
-    Some(&mut *(s as *mut Core))
+    Some(unsafe { &mut *(s as *mut Core) })
 }
 
 /// Registers a new FMU state made by `owner`.
@@ -171,7 +174,8 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if p.is_null() || !p.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
         return None;
     }
-    Some(std::slice::from_raw_parts(p, n))
+    // SAFETY: non-NULL, aligned, and the caller guarantees n valid elements.
+    Some(unsafe { std::slice::from_raw_parts(p, n) })
 }
 
 /// Mutable counterpart of [`slice`].
@@ -182,7 +186,8 @@ unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if p.is_null() || !p.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
         return None;
     }
-    Some(std::slice::from_raw_parts_mut(p, n))
+    // SAFETY: non-NULL, aligned, and the caller guarantees n valid elements.
+    Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
 }
 
 /// A C string as UTF-8; `None` for NULL or invalid UTF-8.
@@ -190,7 +195,8 @@ unsafe fn text<'a>(s: fmi2String) -> Option<&'a str> {
     if s.is_null() {
         return None;
     }
-    CStr::from_ptr(s).to_str().ok()
+    // SAFETY: non-NULL, and the caller guarantees a NUL-terminated string.
+    unsafe { CStr::from_ptr(s) }.to_str().ok()
 }
 
 fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> Status {
@@ -227,10 +233,12 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const fmi2String,
 ) -> fmi2Status {
     guard(c, "fmi2SetDebugLogging", |inst| {
-        let Some(cats) = slice(categories, nCategories) else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(cats) = (unsafe { slice(categories, nCategories) }) else {
             return null_arg(inst, "fmi2SetDebugLogging", "categories", nCategories);
         };
-        let names: Vec<Option<&str>> = cats.iter().map(|s| text(*s)).collect();
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let names: Vec<Option<&str>> = cats.iter().map(|s| unsafe { text(*s) }).collect();
         inst.set_debug_logging(loggingOn != fmi2False, &names)
     })
 }
@@ -274,11 +282,13 @@ pub unsafe extern "C" fn fmi2Instantiate(
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
     let made = catch_unwind(AssertUnwindSafe(|| {
-        let functions = functions.as_ref()?;
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let functions = unsafe { functions.as_ref() }?;
         let name = if instanceName.is_null() {
             None
         } else {
-            Some(CStr::from_ptr(instanceName).to_string_lossy().into_owned())
+            // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+            Some(unsafe { CStr::from_ptr(instanceName) }.to_string_lossy().into_owned())
         };
         let mut log = host_logger(functions, name.as_deref().unwrap_or("(null)"))?;
         let Some(name) = name else {
@@ -288,7 +298,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let guid = if fmuGUID.is_null() {
             "(null)".into()
         } else {
-            CStr::from_ptr(fmuGUID).to_string_lossy()
+            // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+            unsafe { CStr::from_ptr(fmuGUID) }.to_string_lossy()
         };
         let inst = Instance::instantiate(&name, fmuType, &guid, log, loggingOn != fmi2False)?;
         let p = Box::into_raw(Box::new(inst)) as fmi2Component;
@@ -320,10 +331,10 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     };
     for s in orphans {
         // SAFETY: registered states come from Box::into_raw and were just unregistered.
-        drop(Box::from_raw(s as *mut Core));
+        drop(unsafe { Box::from_raw(s as *mut Core) });
     }
     // SAFETY: it was registered, so it came from Box::into_raw and is freed only here.
-    let mut boxed = Box::from_raw(c as *mut Instance);
+    let mut boxed = unsafe { Box::from_raw(c as *mut Instance) };
     let _ = catch_unwind(AssertUnwindSafe(move || {
         boxed.trace_free();
         drop(boxed)
@@ -391,7 +402,8 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetReal", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetReal", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => inst.get_real(vr, value),
         (None, _) => null_arg(inst, "fmi2GetReal", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2GetReal", "value", nvr),
@@ -407,7 +419,8 @@ pub unsafe extern "C" fn fmi2GetInteger(
     nvr: usize,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    guard(c, "fmi2GetInteger", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetInteger", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => inst.get_integer(vr, value),
         (None, _) => null_arg(inst, "fmi2GetInteger", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2GetInteger", "value", nvr),
@@ -423,7 +436,8 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2GetBoolean", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetBoolean", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => {
             let mut flags = vec![false; vr.len()];
             let status = inst.get_boolean(vr, &mut flags);
@@ -448,7 +462,8 @@ pub unsafe extern "C" fn fmi2GetString(
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    guard(c, "fmi2GetString", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetString", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(_)) => inst.get_string(vr),
         (None, _) => null_arg(inst, "fmi2GetString", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2GetString", "value", nvr),
@@ -464,7 +479,8 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2SetReal", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetReal", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => inst.set_real(vr, value),
         (None, _) => null_arg(inst, "fmi2SetReal", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2SetReal", "value", nvr),
@@ -480,7 +496,8 @@ pub unsafe extern "C" fn fmi2SetInteger(
     nvr: usize,
     value: *const fmi2Integer,
 ) -> fmi2Status {
-    guard(c, "fmi2SetInteger", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetInteger", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => inst.set_integer(vr, value),
         (None, _) => null_arg(inst, "fmi2SetInteger", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2SetInteger", "value", nvr),
@@ -496,7 +513,8 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2SetBoolean", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetBoolean", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => {
             let flags: Vec<bool> = value.iter().map(|b| *b != fmi2False).collect();
             inst.set_boolean(vr, &flags)
@@ -515,7 +533,8 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    guard(c, "fmi2SetString", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetString", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(_)) => inst.set_string(vr),
         (None, _) => null_arg(inst, "fmi2SetString", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2SetString", "value", nvr),
@@ -529,7 +548,8 @@ pub unsafe extern "C" fn fmi2SetString(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     guard(c, "fmi2GetFMUstate", |inst| {
-        let Some(slot) = state.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(slot) = (unsafe { state.as_mut() }) else {
             return null_arg(inst, "fmi2GetFMUstate", "FMUstate", 1);
         };
         if slot.is_null() {
@@ -541,7 +561,8 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
                 Err(status) => status,
             };
         }
-        match snapshot(*slot) {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        match unsafe { snapshot(*slot) } {
             Some(existing) => inst.get_state_into(existing),
             None => unknown_state(inst, "fmi2GetFMUstate"),
         }
@@ -557,7 +578,8 @@ fn unknown_state(inst: &mut Instance, func: &str) -> Status {
 /// `c` is an instance; `state` is a state from fmi2GetFMUstate or fmi2DeSerializeFMUstate.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    guard(c, "fmi2SetFMUstate", |inst| match snapshot(state) {
+    // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+    guard(c, "fmi2SetFMUstate", |inst| match unsafe { snapshot(state) } {
         Some(core) => inst.set_state(core),
         None => unknown_state(inst, "fmi2SetFMUstate"),
     })
@@ -572,7 +594,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
     guard(c, "fmi2FreeFMUstate", |inst| {
-        let Some(slot) = state.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(slot) = (unsafe { state.as_mut() }) else {
             return null_arg(inst, "fmi2FreeFMUstate", "FMUstate", 1);
         };
         let status = inst.check_free_state(slot.is_null());
@@ -583,7 +606,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
             return unknown_state(inst, "fmi2FreeFMUstate");
         }
         // SAFETY: it was registered, so it came from Box::into_raw and is freed only here.
-        drop(Box::from_raw(*slot as *mut Core));
+        drop(unsafe { Box::from_raw(*slot as *mut Core) });
         *slot = std::ptr::null_mut();
         Status::Ok
     })
@@ -598,10 +621,12 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     size: *mut usize,
 ) -> fmi2Status {
     guard(c, "fmi2SerializedFMUstateSize", |inst| {
-        let Some(size) = size.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(size) = (unsafe { size.as_mut() }) else {
             return null_arg(inst, "fmi2SerializedFMUstateSize", "size", 1);
         };
-        let Some(core) = snapshot(state) else {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        let Some(core) = (unsafe { snapshot(state) }) else {
             return unknown_state(inst, "fmi2SerializedFMUstateSize");
         };
         match inst.serialized_size(core) {
@@ -626,14 +651,16 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
 ) -> fmi2Status {
     const F: &str = "fmi2SerializeFMUstate";
     guard(c, F, |inst| {
-        let Some(core) = snapshot(state) else {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        let Some(core) = (unsafe { snapshot(state) }) else {
             return unknown_state(inst, F);
         };
         let bytes = match inst.serialize(core) {
             Ok(b) => b,
             Err(status) => return status,
         };
-        let Some(out) = slice_mut(serializedState as *mut u8, size) else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(out) = (unsafe { slice_mut(serializedState as *mut u8, size) }) else {
             return null_arg(inst, F, "serializedState", size);
         };
         if out.len() < bytes.len() {
@@ -660,10 +687,12 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 ) -> fmi2Status {
     const F: &str = "fmi2DeSerializeFMUstate";
     guard(c, F, |inst| {
-        let Some(bytes) = slice(serializedState as *const u8, size) else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(bytes) = (unsafe { slice(serializedState as *const u8, size) }) else {
             return null_arg(inst, F, "serializedState", size);
         };
-        let Some(slot) = state.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(slot) = (unsafe { state.as_mut() }) else {
             return null_arg(inst, F, "FMUstate", 1);
         };
         let core = match inst.deserialize(bytes) {
@@ -674,7 +703,8 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
             *slot = register_state(inst, core);
             return Status::Ok;
         }
-        match snapshot(*slot) {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        match unsafe { snapshot(*slot) } {
             Some(existing) => {
                 *existing = *core;
                 Status::Ok
@@ -712,7 +742,8 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     value: *const fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2SetRealInputDerivatives";
-    guard(c, F, |inst| match (slice(vr, nvr), slice(order, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, F, |inst| match unsafe { (slice(vr, nvr), slice(order, nvr), slice(value, nvr)) } {
         (Some(vr), Some(order), Some(value)) => inst.set_real_input_derivatives(vr, order, value),
         (None, _, _) => null_arg(inst, F, "vr", nvr),
         (_, None, _) => null_arg(inst, F, "order", nvr),
@@ -772,7 +803,8 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     guard(c, "fmi2GetRealStatus", |inst| {
-        let Some(value) = value.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(value) = (unsafe { value.as_mut() }) else {
             return null_arg(inst, "fmi2GetRealStatus", "value", 1);
         };
         match inst.get_real_status(s) {
@@ -805,7 +837,8 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     guard(c, "fmi2GetBooleanStatus", |inst| {
-        let Some(value) = value.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(value) = (unsafe { value.as_mut() }) else {
             return null_arg(inst, "fmi2GetBooleanStatus", "value", 1);
         };
         match inst.get_boolean_status(s) {

@@ -6,15 +6,15 @@
 //! [`Logger`] and returns the FMI status. No `unsafe`, no I/O.
 #![forbid(unsafe_code)]
 
+use super::binding::{self, Value};
+pub use super::core::State;
+use super::core::{Core, Setup};
 use super::state;
 use super::variables::{
-    BaseType, Causality, Type, Var, Variable, CAPABILITIES, LOG_CATEGORIES, VARIABLES,
+    BaseType, Causality, Var, Variable, CAPABILITIES, LOG_CATEGORIES, VARIABLES,
 };
-use crate::model::{
-    BeamBody, Formulation, HostSignal, Interpolation, Outputs, PaperLaw, Params, Sample,
-};
-use crate::sim::{InitialState, Run, SolverOptions};
-use crate::solver::FixedStep;
+use crate::model::Outputs;
+use crate::solver::check_rtol;
 use std::fmt;
 
 /// fmi2Status.
@@ -26,55 +26,6 @@ pub enum Status {
     Discard = 2,
     Error = 3,
     Fatal = 4,
-}
-
-/// The states of the FMI 2.0 co-simulation state machine (spec §4.2.4) that an instance can
-/// be in. `stepInProgress` and `stepCanceled` never occur: steps are synchronous.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum State {
-    Instantiated,
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    Terminated,
-    Error,
-    Fatal,
-}
-
-impl State {
-    const ALL: [State; 7] = [
-        State::Instantiated,
-        State::InitializationMode,
-        State::StepComplete,
-        State::StepFailed,
-        State::Terminated,
-        State::Error,
-        State::Fatal,
-    ];
-
-    fn bit(self) -> u32 {
-        1 << self as u32
-    }
-
-    fn name(self) -> &'static str {
-        match self {
-            State::Instantiated => "instantiated",
-            State::InitializationMode => "initialization mode",
-            State::StepComplete => "step complete",
-            State::StepFailed => "step failed",
-            State::Terminated => "terminated",
-            State::Error => "error",
-            State::Fatal => "fatal",
-        }
-    }
-
-    pub(super) fn to_index(self) -> u64 {
-        self as u64
-    }
-
-    pub(super) fn from_index(k: u64) -> Option<State> {
-        State::ALL.get(k as usize).copied()
-    }
 }
 
 /// Sets of states in which a function may be called.
@@ -115,281 +66,6 @@ pub const STATUS_TERMINATED: i32 = 3;
 /// Where log messages go: (status, category, message). The FFI layer forwards them to the
 /// host's logger; tests collect them.
 pub type Logger = Box<dyn FnMut(Status, &str, &str)>;
-
-/// Where φ comes from (the `phi_source` enumeration).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PhiSource {
-    Input,
-    Law,
-}
-
-/// The values of the parameters and the input.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Values {
-    pub params: Params,
-    pub law: PaperLaw,
-    pub atol: f64,
-    pub fixed_step: f64,
-    pub formulation: Formulation,
-    pub phi_source: PhiSource,
-    pub max_order: i32,
-    pub fixed_order: i32,
-    pub phi_extrapolation: i32,
-    pub phi_interpolation: Interpolation,
-    pub stability_guard: bool,
-    pub phi: f64,
-}
-
-/// A value of any FMI base type.
-#[derive(Clone, Copy, PartialEq)]
-pub(super) enum Value {
-    Real(f64),
-    Integer(i32),
-    Boolean(bool),
-}
-
-/// The bare value, as the traces show it.
-impl fmt::Debug for Value {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Value::Real(x) => write!(f, "{x:?}"),
-            Value::Integer(k) => write!(f, "{k:?}"),
-            Value::Boolean(b) => write!(f, "{b:?}"),
-        }
-    }
-}
-
-impl Values {
-    /// The start values of the variable table.
-    pub(super) fn from_table() -> Values {
-        let mut v = Values {
-            params: Params::default(),
-            law: PaperLaw::default(),
-            atol: 0.0,
-            fixed_step: 0.0,
-            formulation: Formulation::Reduced,
-            phi_source: PhiSource::Input,
-            max_order: 5,
-            fixed_order: 2,
-            phi_extrapolation: 3,
-            phi_interpolation: Interpolation::Smooth,
-            stability_guard: true,
-            phi: 0.0,
-        };
-        for var in VARIABLES {
-            let start = match var.ty {
-                Type::Real { start: Some(s), .. } => Value::Real(s),
-                Type::Real { start: None, .. } => continue,
-                Type::Integer { start, .. } | Type::Enumeration { start, .. } => {
-                    Value::Integer(start)
-                }
-                Type::Boolean { start } => Value::Boolean(start),
-            };
-            v.set(var, start).expect("the table's start values are in range");
-        }
-        v
-    }
-
-    /// Sets `var` after checking the value's range; the error names the variable and the
-    /// allowed range.
-    pub(super) fn set(&mut self, var: &Variable, value: Value) -> Result<(), String> {
-        let bad = |allowed: &str, shown: String| {
-            Err(format!("`{}` = {shown} is out of range: must be {allowed}", var.name))
-        };
-        match value {
-            Value::Real(x) => {
-                // Non-finite values are refused with the variable's whole range, not just
-                // "finite": `EI` = NaN says "positive and finite".
-                let finite = x.is_finite();
-                match var.var {
-                    Var::L | Var::Ei | Var::M | Var::M2 | Var::JC | Var::R | Var::G => {
-                        self.params.set(var.name, x).map_err(|e| e.to_string())?;
-                    }
-                    Var::TRot if finite && x > 0.0 => self.law.t_rot = x,
-                    Var::TRot => return bad("positive and finite", format!("{x:?}")),
-                    Var::Atol if finite && x >= 0.0 => self.atol = x,
-                    Var::FixedStep if finite && x >= 0.0 => self.fixed_step = x,
-                    Var::Atol | Var::FixedStep => {
-                        return bad("non-negative and finite", format!("{x:?}"))
-                    }
-                    Var::PhiEnd | Var::Phi if !finite => return bad("finite", format!("{x:?}")),
-                    Var::PhiEnd => self.law.phi_end = x,
-                    Var::Phi => self.phi = x,
-                    _ => unreachable!("outputs are rejected before, other types by type"),
-                }
-            }
-            Value::Integer(k) => {
-                let (lo, hi) = match var.ty {
-                    Type::Integer { min, max, .. } => (min, max),
-                    Type::Enumeration { ty, .. } => (1, ty.items.len() as i32),
-                    _ => unreachable!("checked by type"),
-                };
-                if !(lo..=hi).contains(&k) {
-                    let allowed = match var.ty {
-                        Type::Enumeration { ty, .. } => {
-                            let items: Vec<String> = (lo..=hi)
-                                .map(|j| format!("{j} ({})", ty.items[(j - 1) as usize].0))
-                                .collect();
-                            format!("one of {}", items.join(", "))
-                        }
-                        _ => format!("an integer in {lo}..={hi}"),
-                    };
-                    return bad(&allowed, k.to_string());
-                }
-                match var.var {
-                    Var::Formulation => self.formulation = Formulation::ALL[(k - 1) as usize],
-                    Var::PhiSource => {
-                        self.phi_source = if k == 1 { PhiSource::Input } else { PhiSource::Law }
-                    }
-                    Var::MaxOrder => self.max_order = k,
-                    Var::FixedOrder => self.fixed_order = k,
-                    Var::PhiExtrapolation => self.phi_extrapolation = k,
-                    Var::PhiInterpolation => {
-                        self.phi_interpolation = Interpolation::ALL[(k - 1) as usize]
-                    }
-                    _ => unreachable!("checked by type"),
-                }
-            }
-            Value::Boolean(b) => match var.var {
-                Var::StabilityGuard => self.stability_guard = b,
-                _ => unreachable!("checked by type"),
-            },
-        }
-        Ok(())
-    }
-
-    /// The value of a parameter or the input.
-    pub(super) fn get(&self, var: Var) -> Option<Value> {
-        let p = &self.params;
-        Some(match var {
-            Var::L => Value::Real(p.l),
-            Var::Ei => Value::Real(p.ei),
-            Var::M => Value::Real(p.m),
-            Var::M2 => Value::Real(p.m2),
-            Var::JC => Value::Real(p.j_c),
-            Var::R => Value::Real(p.r),
-            Var::G => Value::Real(p.g),
-            Var::TRot => Value::Real(self.law.t_rot),
-            Var::PhiEnd => Value::Real(self.law.phi_end),
-            Var::Atol => Value::Real(self.atol),
-            Var::FixedStep => Value::Real(self.fixed_step),
-            Var::Phi => Value::Real(self.phi),
-            Var::Formulation => {
-                let k = Formulation::ALL.iter().position(|f| *f == self.formulation);
-                Value::Integer(k.expect("every formulation is listed") as i32 + 1)
-            }
-            Var::PhiSource => Value::Integer(match self.phi_source {
-                PhiSource::Input => 1,
-                PhiSource::Law => 2,
-            }),
-            Var::MaxOrder => Value::Integer(self.max_order),
-            Var::FixedOrder => Value::Integer(self.fixed_order),
-            Var::PhiExtrapolation => Value::Integer(self.phi_extrapolation),
-            Var::PhiInterpolation => {
-                let k = Interpolation::ALL.iter().position(|i| *i == self.phi_interpolation);
-                Value::Integer(k.expect("every interpolation is listed") as i32 + 1)
-            }
-            Var::StabilityGuard => Value::Boolean(self.stability_guard),
-            _ => return None,
-        })
-    }
-
-    /// The integrator settings, with the experiment's relative tolerance.
-    fn solver_options(&self, rtol: f64) -> SolverOptions {
-        SolverOptions {
-            rtol,
-            atol: (self.atol > 0.0).then_some(self.atol),
-            max_order: self.max_order as usize,
-            fixed_step: (self.fixed_step > 0.0)
-                .then_some(FixedStep { h: self.fixed_step, order: self.fixed_order as usize }),
-            stability_guard: self.stability_guard,
-            max_steps: MAX_STEPS_PER_DO_STEP,
-        }
-    }
-}
-
-/// Most internal steps in one fmi2DoStep, so that a step always returns in bounded time
-/// (about a second in a release build); beyond it the step is discarded with a message. The
-/// stiffest scene of the sweep (EI × 10⁷) needs about 5·10⁴ steps per simulated second.
-pub const MAX_STEPS_PER_DO_STEP: u64 = 1_000_000;
-
-/// What fmi2SetupExperiment defined.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Setup {
-    pub tolerance: Option<f64>,
-    pub start_time: f64,
-    pub stop_time: Option<f64>,
-}
-
-/// Relative tolerance when the host defines none: the DefaultExperiment's.
-const DEFAULT_TOLERANCE: f64 = super::variables::DEFAULT_EXPERIMENT.tolerance;
-
-impl Setup {
-    fn rtol(&self) -> f64 {
-        self.tolerance.unwrap_or(DEFAULT_TOLERANCE)
-    }
-}
-
-/// Everything an FMU state holds: the whole instance except its name and logger.
-#[derive(Clone, Debug)]
-pub struct Core {
-    pub(super) state: State,
-    pub(super) values: Values,
-    pub(super) setup: Setup,
-    /// The integrator, from fmi2ExitInitializationMode on.
-    pub(super) run: Option<Run>,
-    /// φ' and φ'' sent for the next step only.
-    pub(super) pending: [Option<f64>; 2],
-    /// The communication time: the start time, then the end of the last step.
-    pub(super) time: f64,
-    pub(super) last_successful_time: f64,
-    /// fmi2Terminated: the FMU stopped the run.
-    pub(super) terminated: bool,
-    /// Outputs at `time`, computed at the first request after a change.
-    pub(super) cache: Option<Outputs>,
-}
-
-impl Core {
-    pub(super) fn new() -> Core {
-        Core {
-            state: State::Instantiated,
-            values: Values::from_table(),
-            setup: Setup { tolerance: None, start_time: 0.0, stop_time: None },
-            run: None,
-            pending: [None, None],
-            time: 0.0,
-            last_successful_time: 0.0,
-            terminated: false,
-            cache: None,
-        }
-    }
-
-    /// The host's sample of φ at `t`: the input's value and the derivatives sent for the
-    /// next step.
-    pub(super) fn sample(&self, t: f64) -> Sample {
-        Sample { t, phi: self.values.phi, dphi: self.pending[0], ddphi: self.pending[1] }
-    }
-
-    /// A fresh integrator at the start time, after checking every parameter together.
-    pub(super) fn build_run(&self) -> Result<Run, String> {
-        let v = &self.values;
-        let model = BeamBody::new(v.params).map_err(|e| e.to_string())?;
-        let t0 = self.setup.start_time;
-        let options = v.solver_options(self.setup.rtol());
-        let init = InitialState::default();
-        let run = match v.phi_source {
-            PhiSource::Law => Run::with_law(model, v.formulation, &options, t0, init, v.law),
-            PhiSource::Input => {
-                let signal = HostSignal::new(v.phi_interpolation, v.phi_extrapolation as usize);
-                Run::with_host(model, v.formulation, &options, t0, init, signal, self.sample(t0))
-            }
-        }
-        .map_err(|e| e.to_string())?;
-        let phi0 = run.piece().eval(t0).phi;
-        run.model().check_start(phi0, 0.0, 0.0).map_err(|e| e.to_string())?;
-        Ok(run)
-    }
-}
 
 /// Log switches, per category of [`LOG_CATEGORIES`].
 #[derive(Clone, Copy, Debug, Default)]
@@ -437,6 +113,27 @@ impl<T: fmt::Debug> fmt::Display for Listing<'_, T> {
     }
 }
 
+/// Why a call failed: the status it returns and the message logged. Methods pass it on with
+/// `?`; [`Instance::edge`] logs it and turns it into the status, once, for every function.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FmiError {
+    pub status: Status,
+    pub message: String,
+}
+
+impl FmiError {
+    fn error(message: impl Into<String>) -> FmiError {
+        FmiError { status: Status::Error, message: message.into() }
+    }
+
+    fn discard(message: impl Into<String>) -> FmiError {
+        FmiError { status: Status::Discard, message: message.into() }
+    }
+}
+
+/// The result of a call: a value (the status for calls that return nothing else) or why not.
+pub type FmiResult<T = Status> = Result<T, FmiError>;
+
 impl Instance {
     /// fmi2Instantiate. `None`, after logging why, for an empty name, a GUID that is not
     /// this model's, or a type other than co-simulation.
@@ -447,28 +144,27 @@ impl Instance {
         mut log: Logger,
         logging_on: bool,
     ) -> Option<Instance> {
-        let fail = |log: &mut Logger, msg: String| {
-            log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {msg}"));
-            None
-        };
-        if name.is_empty() {
-            return fail(&mut log, "instanceName is empty".into());
-        }
-        if fmu_type != FMI2_COSIMULATION {
-            return fail(
-                &mut log,
-                format!(
+        let checked = (|| {
+            if name.is_empty() {
+                return Err("instanceName is empty".to_string());
+            }
+            if fmu_type != FMI2_COSIMULATION {
+                return Err(format!(
                     "fmuType = {fmu_type}: this FMU provides co-simulation only \
                      (fmi2CoSimulation = {FMI2_COSIMULATION})"
-                ),
-            );
-        }
-        let ours = super::variables::guid();
-        if guid != ours {
-            return fail(
-                &mut log,
-                format!("fmuGUID {guid} does not match this binary's {ours}: wrong or stale FMU"),
-            );
+                ));
+            }
+            let ours = super::variables::guid();
+            if guid != ours {
+                return Err(format!(
+                    "fmuGUID {guid} does not match this binary's {ours}: wrong or stale FMU"
+                ));
+            }
+            Ok(())
+        })();
+        if let Err(msg) = checked {
+            log(Status::Error, "logStatusError", &format!("fmi2Instantiate: {msg}"));
+            return None;
         }
         let mut inst = Instance {
             name: name.to_string(),
@@ -488,7 +184,7 @@ impl Instance {
         self.core.state
     }
 
-    // ----- logging ------------------------------------------------------------------------
+    // ----- logging and the edge -----------------------------------------------------------
 
     /// Logs `msg`. Errors, discards and fatal errors always go out; other messages only
     /// when their category is on.
@@ -501,10 +197,18 @@ impl Instance {
         }
     }
 
-    /// Logs `msg` at `status` and returns it.
-    fn fail(&mut self, status: Status, msg: impl fmt::Display) -> Status {
-        self.log(status, &msg.to_string());
-        status
+    /// The one place where a result becomes an FMI status: a failure is logged with its
+    /// message and returns its status.
+    pub fn edge<T>(&mut self, result: FmiResult<T>) -> Result<T, Status> {
+        result.map_err(|e| {
+            self.log(e.status, &e.message);
+            e.status
+        })
+    }
+
+    /// [`edge`](Self::edge) for calls that return a status only.
+    fn status(&mut self, result: FmiResult) -> Status {
+        self.edge(result).unwrap_or_else(|status| status)
     }
 
     /// Logs a call when `logCalls` is on; the message is built only then.
@@ -533,29 +237,32 @@ impl Instance {
     /// Refuses every call on a fatal instance before the call touches anything (its
     /// arguments included): logs the illegal call and returns false.
     pub fn check_not_fatal(&mut self, func: &str) -> bool {
-        self.allowed(func, mask::ANY_BUT_FATAL)
+        let allowed = self.allowed(func, mask::ANY_BUT_FATAL);
+        self.edge(allowed).is_ok()
     }
 
-    /// Checks that `func` may be called in the current state; logs and returns false if not.
-    fn allowed(&mut self, func: &str, mask: u32) -> bool {
+    /// Whether `func` may be called in the current state.
+    fn allowed(&self, func: &str, mask: u32) -> FmiResult<()> {
         let state = self.core.state;
         if mask & state.bit() != 0 {
-            return true;
+            return Ok(());
         }
-        self.log(
-            Status::Error,
-            &format!("{func}: illegal call sequence: not allowed in state `{}`", state.name()),
-        );
-        false
+        Err(FmiError::error(format!(
+            "{func}: illegal call sequence: not allowed in state `{}`",
+            state.name()
+        )))
     }
 
     /// fmi2SetDebugLogging. `categories`: `None` where the host passed NULL or invalid
     /// UTF-8. An empty list switches every category.
     pub fn set_debug_logging(&mut self, on: bool, categories: &[Option<&str>]) -> Status {
+        let r = self.try_set_debug_logging(on, categories);
+        self.status(r)
+    }
+
+    fn try_set_debug_logging(&mut self, on: bool, categories: &[Option<&str>]) -> FmiResult {
         const F: &str = "fmi2SetDebugLogging";
-        if !self.allowed(F, mask::ANY_BUT_FATAL) {
-            return Status::Error;
-        }
+        self.allowed(F, mask::ANY_BUT_FATAL)?;
         let mut flags = self.logging;
         if categories.is_empty() {
             flags.0 = [on; LOG_CATEGORIES.len()];
@@ -563,10 +270,10 @@ impl Instance {
         for c in categories {
             let Some(k) = c.and_then(|c| LOG_CATEGORIES.iter().position(|(n, _)| *n == c)) else {
                 let names: Vec<&str> = LOG_CATEGORIES.iter().map(|(n, _)| *n).collect();
-                return self.fail(
-                    Status::Error,
-                    format!("{F}: unknown log category {c:?}: must be one of {}", names.join(", ")),
-                );
+                return Err(FmiError::error(format!(
+                    "{F}: unknown log category {c:?}: must be one of {}",
+                    names.join(", ")
+                )));
             };
             if LOG_CATEGORIES[k].0 == "logAll" {
                 flags.0 = [on; LOG_CATEGORIES.len()];
@@ -576,7 +283,7 @@ impl Instance {
         }
         self.logging = flags;
         self.trace(format_args!("{F}: loggingOn = {on}, categories {categories:?}"));
-        Status::Ok
+        Ok(Status::Ok)
     }
 
     // ----- lifecycle ----------------------------------------------------------------------
@@ -588,33 +295,36 @@ impl Instance {
         start_time: f64,
         stop_time: Option<f64>,
     ) -> Status {
+        let r = self.try_setup_experiment(tolerance, start_time, stop_time);
+        self.status(r)
+    }
+
+    fn try_setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> FmiResult {
         const F: &str = "fmi2SetupExperiment";
-        if !self.allowed(F, mask::INSTANTIATED) {
-            return Status::Error;
-        }
+        self.allowed(F, mask::INSTANTIATED)?;
         if let Some(tol) = tolerance {
-            if !(tol.is_finite() && (1e-14..=1.0).contains(&tol)) {
-                return self.fail(
-                    Status::Error,
-                    format!("{F}: tolerance = {tol:?} is out of range: must be in [1e-14, 1]"),
-                );
-            }
+            check_rtol(tol).map_err(|allowed| {
+                FmiError::error(format!(
+                    "{F}: tolerance = {tol:?} is out of range: must be {allowed}"
+                ))
+            })?;
         }
         if !start_time.is_finite() {
-            return self.fail(
-                Status::Error,
-                format!("{F}: startTime = {start_time} is out of range: must be finite"),
-            );
+            return Err(FmiError::error(format!(
+                "{F}: startTime = {start_time} is out of range: must be finite"
+            )));
         }
         if let Some(stop) = stop_time {
             if !(stop.is_finite() && stop >= start_time) {
-                return self.fail(
-                    Status::Error,
-                    format!(
-                        "{F}: stopTime = {stop} is out of range: must be finite and \
-                         >= startTime = {start_time}"
-                    ),
-                );
+                return Err(FmiError::error(format!(
+                    "{F}: stopTime = {stop} is out of range: must be finite and \
+                     >= startTime = {start_time}"
+                )));
             }
         }
         let setup = Setup { tolerance, start_time, stop_time };
@@ -623,66 +333,65 @@ impl Instance {
         self.core.last_successful_time = start_time;
         self.core.cache = None;
         self.trace(format_args!("{F}: {setup:?}"));
-        Status::Ok
+        Ok(Status::Ok)
     }
 
     /// fmi2EnterInitializationMode.
     pub fn enter_initialization_mode(&mut self) -> Status {
-        if !self.allowed("fmi2EnterInitializationMode", mask::INSTANTIATED) {
-            return Status::Error;
-        }
-        self.core.state = State::InitializationMode;
-        self.core.cache = None;
-        self.trace(format_args!("fmi2EnterInitializationMode: state `initialization mode`"));
-        Status::Ok
+        let r = self.allowed("fmi2EnterInitializationMode", mask::INSTANTIATED).map(|()| {
+            self.core.state = State::InitializationMode;
+            self.core.cache = None;
+            self.trace(format_args!("fmi2EnterInitializationMode: state `initialization mode`"));
+            Status::Ok
+        });
+        self.status(r)
     }
 
     /// fmi2ExitInitializationMode: checks all parameters together and starts the
     /// integrator. A failure puts the instance in the error state.
     pub fn exit_initialization_mode(&mut self) -> Status {
+        let r = self.try_exit_initialization_mode();
+        self.status(r)
+    }
+
+    fn try_exit_initialization_mode(&mut self) -> FmiResult {
         const F: &str = "fmi2ExitInitializationMode";
-        if !self.allowed(F, mask::INITIALIZATION) {
-            return Status::Error;
-        }
-        match self.core.build_run() {
-            Ok(run) => {
-                let t0 = self.core.setup.start_time;
-                self.core.pending = [None, None];
-                self.core.run = Some(run);
-                self.core.time = t0;
-                self.core.last_successful_time = t0;
-                self.core.terminated = false;
-                self.core.cache = None;
-                self.core.state = State::StepComplete;
-                self.trace(format_args!("{F}: integrator started at t = {t0:?}"));
-                Status::Ok
-            }
-            Err(msg) => {
-                self.core.state = State::Error;
-                self.fail(Status::Error, format!("{F}: {msg}"))
-            }
-        }
+        self.allowed(F, mask::INITIALIZATION)?;
+        let run = self.core.build_run().map_err(|msg| {
+            self.core.state = State::Error;
+            FmiError::error(format!("{F}: {msg}"))
+        })?;
+        let t0 = self.core.setup.start_time;
+        self.core.pending = [None, None];
+        self.core.run = Some(run);
+        self.core.time = t0;
+        self.core.last_successful_time = t0;
+        self.core.terminated = false;
+        self.core.cache = None;
+        self.core.state = State::StepComplete;
+        self.trace(format_args!("{F}: integrator started at t = {t0:?}"));
+        Ok(Status::Ok)
     }
 
     /// fmi2Terminate.
     pub fn terminate(&mut self) -> Status {
-        if !self.allowed("fmi2Terminate", mask::TERMINATE) {
-            return Status::Error;
-        }
-        self.core.state = State::Terminated;
-        let t = self.core.time;
-        self.trace(format_args!("fmi2Terminate: at t = {t:?}"));
-        Status::Ok
+        let r = self.allowed("fmi2Terminate", mask::TERMINATE).map(|()| {
+            self.core.state = State::Terminated;
+            let t = self.core.time;
+            self.trace(format_args!("fmi2Terminate: at t = {t:?}"));
+            Status::Ok
+        });
+        self.status(r)
     }
 
     /// fmi2Reset: back to `instantiated` with the start values. Debug-logging settings stay.
     pub fn reset(&mut self) -> Status {
-        if !self.allowed("fmi2Reset", mask::ANY_BUT_FATAL) {
-            return Status::Error;
-        }
-        self.core = Core::new();
-        self.trace(format_args!("fmi2Reset: back to `instantiated` with the start values"));
-        Status::Ok
+        let r = self.allowed("fmi2Reset", mask::ANY_BUT_FATAL).map(|()| {
+            self.core = Core::new();
+            self.trace(format_args!("fmi2Reset: back to `instantiated` with the start values"));
+            Status::Ok
+        });
+        self.status(r)
     }
 
     /// Marks the instance fatal after a caught panic: nothing but fmi2FreeInstance works
@@ -695,29 +404,26 @@ impl Instance {
     // ----- get and set --------------------------------------------------------------------
 
     /// Finds `vr` and checks it has base type `base`.
-    fn lookup(&mut self, func: &str, vr: u32, base: BaseType) -> Result<&'static Variable, Status> {
-        let Some(var) = Var::from_vr(vr) else {
-            return Err(self.fail(
-                Status::Error,
-                format!("{func}: unknown value reference {vr}: must be below {}", VARIABLES.len()),
-            ));
-        };
+    fn lookup(func: &str, vr: u32, base: BaseType) -> FmiResult<&'static Variable> {
+        let var = Var::from_vr(vr).ok_or_else(|| {
+            FmiError::error(format!(
+                "{func}: unknown value reference {vr}: must be below {}",
+                VARIABLES.len()
+            ))
+        })?;
         let info = var.info();
         if info.ty.base() != base {
-            return Err(self.fail(
-                Status::Error,
-                format!(
-                    "{func}: value reference {vr} is `{}`, a {:?} variable, not a {base:?}",
-                    info.name,
-                    info.ty.base()
-                ),
-            ));
+            return Err(FmiError::error(format!(
+                "{func}: value reference {vr} is `{}`, a {:?} variable, not a {base:?}",
+                info.name,
+                info.ty.base()
+            )));
         }
         Ok(info)
     }
 
     /// The outputs at the communication time, computed now if they are not cached.
-    fn outputs(&mut self, func: &str) -> Result<Outputs, Status> {
+    fn outputs(&mut self, func: &str) -> FmiResult<Outputs> {
         if let Some(o) = self.core.cache {
             return Ok(o);
         }
@@ -728,47 +434,26 @@ impl Instance {
                 run.outputs_at(self.core.setup.start_time).map_err(|e| e.to_string())
             }),
         };
-        match computed {
-            Ok(o) => {
-                self.core.cache = Some(o);
-                Ok(o)
-            }
-            Err(msg) => {
-                Err(self
-                    .fail(Status::Error, format!("{func}: the outputs cannot be computed: {msg}")))
-            }
-        }
+        let o = computed.map_err(|msg| {
+            FmiError::error(format!("{func}: the outputs cannot be computed: {msg}"))
+        })?;
+        self.core.cache = Some(o);
+        Ok(o)
     }
 
     /// The value of any variable of base type `base`.
-    fn get_value(&mut self, func: &str, vr: u32, base: BaseType) -> Result<Value, Status> {
-        let info = self.lookup(func, vr, base)?;
+    fn get_value(&mut self, func: &str, vr: u32, base: BaseType) -> FmiResult<Value> {
+        let info = Self::lookup(func, vr, base)?;
         if let Some(v) = self.core.values.get(info.var) {
             return Ok(v);
         }
         let o = self.outputs(func)?;
-        let x = match info.var {
-            Var::V1 => o.v1,
-            Var::Theta1 => o.theta1,
-            Var::U2 => o.u2,
-            Var::Dv1 => o.dv1,
-            Var::Dtheta1 => o.dtheta1,
-            Var::Du2 => o.du2,
-            Var::N => o.reactions.n,
-            Var::P => o.reactions.p,
-            Var::Moment => o.reactions.m,
-            Var::Drift => o.drift,
-            Var::Energy => o.energy,
-            Var::PhiApplied => o.phi.phi,
-            Var::DphiApplied => o.phi.dphi,
-            Var::DdphiApplied => o.phi.ddphi,
-            _ => unreachable!("parameters and the input are served above"),
-        };
+        let x = binding::output(info.var, &o).expect("parameters and the input are served above");
         if !x.is_finite() {
-            return Err(self.fail(
-                Status::Error,
-                format!("{func}: output `{}` is not finite at t = {}", info.name, o.t),
-            ));
+            return Err(FmiError::error(format!(
+                "{func}: output `{}` is not finite at t = {}",
+                info.name, o.t
+            )));
         }
         Ok(Value::Real(x))
     }
@@ -781,23 +466,22 @@ impl Instance {
         out: &mut [T],
         convert: impl Fn(Value) -> T,
     ) -> Status {
-        if !self.allowed(func, mask::GET) {
-            return Status::Error;
-        }
-        if vrs.len() != out.len() {
-            return self.fail(
-                Status::Error,
-                format!("{func}: {} value references but {} values", vrs.len(), out.len()),
-            );
-        }
-        for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-            match self.get_value(func, *vr, base) {
-                Ok(v) => *slot = convert(v),
-                Err(status) => return status,
+        let r = (|| {
+            self.allowed(func, mask::GET)?;
+            if vrs.len() != out.len() {
+                return Err(FmiError::error(format!(
+                    "{func}: {} value references but {} values",
+                    vrs.len(),
+                    out.len()
+                )));
             }
-        }
-        self.trace(format_args!("{func}: {}", Listing(vrs, &*out)));
-        Status::Ok
+            for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                *slot = convert(self.get_value(func, *vr, base)?);
+            }
+            self.trace(format_args!("{func}: {}", Listing(vrs, &*out)));
+            Ok(Status::Ok)
+        })();
+        self.status(r)
     }
 
     /// fmi2GetReal.
@@ -824,62 +508,63 @@ impl Instance {
         })
     }
 
+    /// fmi2GetString and fmi2SetString: this model has no string variables, so any value
+    /// reference is refused.
+    fn no_strings(&mut self, func: &str, allowed: u32, vrs: &[u32]) -> Status {
+        let r = self.allowed(func, allowed).and_then(|()| match vrs.first() {
+            None => {
+                self.trace(format_args!("{func}: no variables"));
+                Ok(Status::Ok)
+            }
+            Some(vr) => Self::lookup(func, *vr, BaseType::String).map(|_| Status::Error),
+        });
+        self.status(r)
+    }
+
     /// fmi2GetString: this model has no string variables.
     pub fn get_string(&mut self, vrs: &[u32]) -> Status {
-        if !self.allowed("fmi2GetString", mask::GET) {
-            return Status::Error;
-        }
-        match vrs.first() {
-            None => {
-                self.trace(format_args!("fmi2GetString: no variables"));
-                Status::Ok
-            }
-            Some(vr) => {
-                self.lookup("fmi2GetString", *vr, BaseType::String).err().unwrap_or(Status::Error)
-            }
-        }
+        self.no_strings("fmi2GetString", mask::GET, vrs)
     }
 
     /// Sets all values or none: each is checked first, against its variable's causality,
     /// the current state and its range.
     fn set_all(&mut self, func: &str, base: BaseType, vrs: &[u32], values: &[Value]) -> Status {
-        if !self.allowed(func, mask::SET) {
-            return Status::Error;
-        }
-        if vrs.len() != values.len() {
-            return self.fail(
-                Status::Error,
-                format!("{func}: {} value references but {} values", vrs.len(), values.len()),
-            );
-        }
-        let mut next = self.core.values;
-        for (vr, value) in vrs.iter().zip(values) {
-            let info = match self.lookup(func, *vr, base) {
-                Ok(info) => info,
-                Err(status) => return status,
-            };
+        let r = (|| {
+            self.allowed(func, mask::SET)?;
+            if vrs.len() != values.len() {
+                return Err(FmiError::error(format!(
+                    "{func}: {} value references but {} values",
+                    vrs.len(),
+                    values.len()
+                )));
+            }
+            let mut next = self.core.values;
             let state = self.core.state;
-            let refusal = match info.causality {
-                Causality::Output => Some("it is an output".to_string()),
-                Causality::Parameter if state == State::StepComplete => Some(format!(
-                    "it is a fixed parameter, settable only before fmi2ExitInitializationMode \
-                     (state is `{}`)",
-                    state.name()
-                )),
-                _ => None,
-            };
-            if let Some(why) = refusal {
-                return self
-                    .fail(Status::Error, format!("{func}: cannot set `{}`: {why}", info.name));
+            for (vr, value) in vrs.iter().zip(values) {
+                let info = Self::lookup(func, *vr, base)?;
+                let refusal = match info.causality {
+                    Causality::Output => Some("it is an output".to_string()),
+                    Causality::Parameter if state == State::StepComplete => Some(format!(
+                        "it is a fixed parameter, settable only before \
+                         fmi2ExitInitializationMode (state is `{}`)",
+                        state.name()
+                    )),
+                    _ => None,
+                };
+                if let Some(why) = refusal {
+                    return Err(FmiError::error(format!(
+                        "{func}: cannot set `{}`: {why}",
+                        info.name
+                    )));
+                }
+                next.set(info, *value).map_err(|msg| FmiError::error(format!("{func}: {msg}")))?;
             }
-            if let Err(msg) = next.set(info, *value) {
-                return self.fail(Status::Error, format!("{func}: {msg}"));
-            }
-        }
-        self.core.values = next;
-        self.core.cache = None;
-        self.trace(format_args!("{func}: {}", Listing(vrs, values)));
-        Status::Ok
+            self.core.values = next;
+            self.core.cache = None;
+            self.trace(format_args!("{func}: {}", Listing(vrs, values)));
+            Ok(Status::Ok)
+        })();
+        self.status(r)
     }
 
     /// fmi2SetReal.
@@ -902,18 +587,7 @@ impl Instance {
 
     /// fmi2SetString: this model has no string variables.
     pub fn set_string(&mut self, vrs: &[u32]) -> Status {
-        if !self.allowed("fmi2SetString", mask::SET) {
-            return Status::Error;
-        }
-        match vrs.first() {
-            None => {
-                self.trace(format_args!("fmi2SetString: no variables"));
-                Status::Ok
-            }
-            Some(vr) => {
-                self.lookup("fmi2SetString", *vr, BaseType::String).err().unwrap_or(Status::Error)
-            }
-        }
+        self.no_strings("fmi2SetString", mask::SET, vrs)
     }
 
     // ----- co-simulation ------------------------------------------------------------------
@@ -926,261 +600,256 @@ impl Instance {
         orders: &[i32],
         values: &[f64],
     ) -> Status {
+        let r = self.try_set_real_input_derivatives(vrs, orders, values);
+        self.status(r)
+    }
+
+    fn try_set_real_input_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        values: &[f64],
+    ) -> FmiResult {
         const F: &str = "fmi2SetRealInputDerivatives";
-        if !self.allowed(F, mask::SET) {
-            return Status::Error;
-        }
+        self.allowed(F, mask::SET)?;
         if vrs.len() != orders.len() || vrs.len() != values.len() {
-            return self.fail(Status::Error, format!("{F}: arrays of different lengths"));
+            return Err(FmiError::error(format!("{F}: arrays of different lengths")));
         }
         let mut pending = self.core.pending;
         for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
-            if let Err(status) = self.lookup(F, *vr, BaseType::Real) {
-                return status;
-            }
+            Self::lookup(F, *vr, BaseType::Real)?;
             if *vr != Var::Phi.vr() {
-                return self.fail(
-                    Status::Error,
-                    format!(
-                        "{F}: value reference {vr} is not an input; only `phi` ({}) is",
-                        Var::Phi.vr()
-                    ),
-                );
+                return Err(FmiError::error(format!(
+                    "{F}: value reference {vr} is not an input; only `phi` ({}) is",
+                    Var::Phi.vr()
+                )));
             }
             if !(1..=2).contains(order) {
-                return self.fail(
-                    Status::Error,
-                    format!("{F}: order {order} of `phi` is out of range: must be 1 or 2"),
-                );
+                return Err(FmiError::error(format!(
+                    "{F}: order {order} of `phi` is out of range: must be 1 or 2"
+                )));
             }
             if !value.is_finite() {
-                return self.fail(Status::Error, format!("{F}: derivative of order {order} of `phi` = {value} is out of range: must be finite"));
+                return Err(FmiError::error(format!(
+                    "{F}: derivative of order {order} of `phi` = {value} is out of range: \
+                     must be finite"
+                )));
             }
             pending[(*order - 1) as usize] = Some(*value);
         }
         self.core.pending = pending;
         self.core.cache = None;
         self.trace(format_args!("{F}: vr {vrs:?}, order {orders:?}, value {values:?}"));
-        Status::Ok
+        Ok(Status::Ok)
     }
 
     /// fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder = 0).
     pub fn get_real_output_derivatives(&mut self) -> Status {
         const F: &str = "fmi2GetRealOutputDerivatives";
-        if !self.allowed(F, mask::OUTPUT_DERIVATIVES) {
-            return Status::Error;
-        }
         debug_assert_eq!(CAPABILITIES.max_output_derivative_order, 0);
-        self.fail(Status::Error, format!("{F}: not provided (maxOutputDerivativeOrder = 0)"))
+        let r = self.allowed(F, mask::OUTPUT_DERIVATIVES).and_then(|()| {
+            Err(FmiError::error(format!("{F}: not provided (maxOutputDerivativeOrder = 0)")))
+        });
+        self.status(r)
     }
 
     /// fmi2DoStep: integrates from `tc` to exactly `tc + h`.
     pub fn do_step(&mut self, tc: f64, h: f64) -> Status {
+        let r = self.try_do_step(tc, h);
+        self.status(r)
+    }
+
+    fn try_do_step(&mut self, tc: f64, h: f64) -> FmiResult {
         const F: &str = "fmi2DoStep";
-        if !self.allowed(F, mask::STEP_COMPLETE) {
-            return Status::Error;
-        }
+        self.allowed(F, mask::STEP_COMPLETE)?;
         let time = self.core.time;
         if !(h.is_finite() && h > 0.0) {
-            return self.fail(
-                Status::Error,
-                format!(
-                    "{F}: communicationStepSize = {h} is out of range: must be positive and finite"
-                ),
-            );
+            return Err(FmiError::error(format!(
+                "{F}: communicationStepSize = {h} is out of range: must be positive and finite"
+            )));
         }
         // "Up to rounding": hosts compute tc as start + n·h or by sums; allow a few ulps.
         let fuzz = 64.0 * f64::EPSILON * time.abs().max(tc.abs()).max(h);
         if !(tc.is_finite() && (tc - time).abs() <= fuzz) {
-            return self.fail(
-                Status::Error,
-                format!(
-                    "{F}: currentCommunicationPoint = {tc} does not match the FMU's time {time}"
-                ),
-            );
+            return Err(FmiError::error(format!(
+                "{F}: currentCommunicationPoint = {tc} does not match the FMU's time {time}"
+            )));
         }
         if tc + h == tc {
-            return self.fail(
-                Status::Error,
-                format!(
-                    "{F}: communicationStepSize = {h:?} is below the resolution of the time \
-                     tc = {tc:?} (tc + h = tc): the step would not advance"
-                ),
-            );
+            return Err(FmiError::error(format!(
+                "{F}: communicationStepSize = {h:?} is below the resolution of the time \
+                 tc = {tc:?} (tc + h = tc): the step would not advance"
+            )));
         }
         let target = tc + h;
         if let Some(stop) = self.core.setup.stop_time {
             if target > stop + 64.0 * f64::EPSILON * stop.abs().max(h) {
-                return self.fail(
-                    Status::Error,
-                    format!("{F}: the step to t = {target} passes stopTime = {stop}"),
-                );
+                return Err(FmiError::error(format!(
+                    "{F}: the step to t = {target} passes stopTime = {stop}"
+                )));
             }
         }
         self.trace(format_args!("{F}: tc = {tc}, h = {h}"));
         let sample = self.core.sample(tc);
         self.core.pending = [None, None];
+        self.core.cache = None;
         let run = self.core.run.as_mut().expect("stepComplete has an integrator");
         run.set_sample(sample);
-        let result = run.step_to(target).map_err(|e| (e.to_string(), run.t()));
-        self.core.cache = None;
-        match result {
-            Ok(()) => {
-                self.core.time = target;
-                self.core.last_successful_time = target;
-                Status::Ok
-            }
-            Err((e, t)) => {
-                self.core.time = t;
-                self.core.last_successful_time = t;
-                self.core.terminated = true;
-                self.core.state = State::StepFailed;
-                self.fail(
-                    Status::Discard,
-                    format!(
-                        "{F}: integration failed: {e}. The FMU stopped at t = {t} (fmi2LastSuccessfulTime), \
-                         with fmi2Terminated = true"
-                    ),
-                )
-            }
+        let result = run.step_to(target);
+        let t = run.t();
+        if let Err(e) = result {
+            self.core.time = t;
+            self.core.last_successful_time = t;
+            self.core.terminated = true;
+            self.core.state = State::StepFailed;
+            return Err(FmiError::discard(format!(
+                "{F}: integration failed: {e}. The FMU stopped at t = {t} \
+                 (fmi2LastSuccessfulTime), with fmi2Terminated = true"
+            )));
         }
+        self.core.time = target;
+        self.core.last_successful_time = target;
+        Ok(Status::Ok)
     }
 
     /// fmi2CancelStep: steps are synchronous, so there is never one to cancel.
     pub fn cancel_step(&mut self) -> Status {
-        self.allowed("fmi2CancelStep", mask::NONE);
-        Status::Error
+        let r = self.allowed("fmi2CancelStep", mask::NONE).map(|()| Status::Error);
+        self.status(r)
     }
 
     /// fmi2GetStatus, fmi2GetIntegerStatus, fmi2GetStringStatus: none of their kinds is
     /// provided (they concern asynchronous steps).
     pub fn get_unprovided_status(&mut self, func: &str, kind: i32) -> Status {
-        if !self.allowed(func, mask::STATUS) {
-            return Status::Error;
-        }
-        self.fail(
-            Status::Error,
-            format!(
+        let r = self.allowed(func, mask::STATUS).and_then(|()| {
+            Err(FmiError::error(format!(
                 "{func}: status kind {kind} is not provided: fmi2DoStep never returns fmi2Pending"
-            ),
-        )
+            )))
+        });
+        self.status(r)
     }
 
     /// fmi2GetRealStatus: fmi2LastSuccessfulTime.
     pub fn get_real_status(&mut self, kind: i32) -> Result<f64, Status> {
         const F: &str = "fmi2GetRealStatus";
-        if !self.allowed(F, mask::STATUS) {
-            return Err(Status::Error);
-        }
-        if kind != STATUS_LAST_SUCCESSFUL_TIME {
-            return Err(self.fail(Status::Error, format!("{F}: status kind {kind} is not provided: only fmi2LastSuccessfulTime ({STATUS_LAST_SUCCESSFUL_TIME})")));
-        }
-        let t = self.core.last_successful_time;
-        self.trace(format_args!("{F}: fmi2LastSuccessfulTime = {t:?}"));
-        Ok(t)
+        let r = self.allowed(F, mask::STATUS).and_then(|()| {
+            if kind != STATUS_LAST_SUCCESSFUL_TIME {
+                return Err(FmiError::error(format!(
+                    "{F}: status kind {kind} is not provided: only fmi2LastSuccessfulTime \
+                     ({STATUS_LAST_SUCCESSFUL_TIME})"
+                )));
+            }
+            let t = self.core.last_successful_time;
+            self.trace(format_args!("{F}: fmi2LastSuccessfulTime = {t:?}"));
+            Ok(t)
+        });
+        self.edge(r)
     }
 
     /// fmi2GetBooleanStatus: fmi2Terminated.
     pub fn get_boolean_status(&mut self, kind: i32) -> Result<bool, Status> {
         const F: &str = "fmi2GetBooleanStatus";
-        if !self.allowed(F, mask::STATUS) {
-            return Err(Status::Error);
-        }
-        if kind != STATUS_TERMINATED {
-            return Err(self.fail(Status::Error, format!("{F}: status kind {kind} is not provided: only fmi2Terminated ({STATUS_TERMINATED})")));
-        }
-        let terminated = self.core.terminated;
-        self.trace(format_args!("{F}: fmi2Terminated = {terminated}"));
-        Ok(terminated)
+        let r = self.allowed(F, mask::STATUS).and_then(|()| {
+            if kind != STATUS_TERMINATED {
+                return Err(FmiError::error(format!(
+                    "{F}: status kind {kind} is not provided: only fmi2Terminated \
+                     ({STATUS_TERMINATED})"
+                )));
+            }
+            let terminated = self.core.terminated;
+            self.trace(format_args!("{F}: fmi2Terminated = {terminated}"));
+            Ok(terminated)
+        });
+        self.edge(r)
     }
 
     /// fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative = false).
     pub fn get_directional_derivative(&mut self) -> Status {
         const F: &str = "fmi2GetDirectionalDerivative";
-        if !self.allowed(F, mask::GET) {
-            return Status::Error;
-        }
-        self.fail(
-            Status::Error,
-            format!("{F}: not provided (providesDirectionalDerivative = false)"),
-        )
+        let r = self.allowed(F, mask::GET).and_then(|()| {
+            Err(FmiError::error(format!(
+                "{F}: not provided (providesDirectionalDerivative = false)"
+            )))
+        });
+        self.status(r)
     }
 
     // ----- FMU state ----------------------------------------------------------------------
 
     /// fmi2GetFMUstate: a copy of everything but the name and logger.
     pub fn get_state(&mut self) -> Result<Box<Core>, Status> {
-        if !self.allowed("fmi2GetFMUstate", mask::GET | mask::INSTANTIATED) {
-            return Err(Status::Error);
-        }
-        self.trace_state("fmi2GetFMUstate: new snapshot");
-        Ok(Box::new(self.core.clone()))
+        let r = self.allowed("fmi2GetFMUstate", mask::GET | mask::INSTANTIATED).map(|()| {
+            self.trace_state("fmi2GetFMUstate: new snapshot");
+            Box::new(self.core.clone())
+        });
+        self.edge(r)
     }
 
     /// fmi2GetFMUstate into an existing snapshot, reusing its memory.
     pub fn get_state_into(&mut self, snapshot: &mut Core) -> Status {
-        if !self.allowed("fmi2GetFMUstate", mask::GET | mask::INSTANTIATED) {
-            return Status::Error;
-        }
-        snapshot.clone_from(&self.core);
-        self.trace_state("fmi2GetFMUstate: into the existing snapshot");
-        Status::Ok
+        let r = self.allowed("fmi2GetFMUstate", mask::GET | mask::INSTANTIATED).map(|()| {
+            snapshot.clone_from(&self.core);
+            self.trace_state("fmi2GetFMUstate: into the existing snapshot");
+            Status::Ok
+        });
+        self.status(r)
     }
 
     /// fmi2SetFMUstate.
     pub fn set_state(&mut self, snapshot: &Core) -> Status {
-        if !self.allowed("fmi2SetFMUstate", mask::GET | mask::INSTANTIATED) {
-            return Status::Error;
-        }
-        self.core.clone_from(snapshot);
-        self.trace_state("fmi2SetFMUstate: restored");
-        Status::Ok
+        let r = self.allowed("fmi2SetFMUstate", mask::GET | mask::INSTANTIATED).map(|()| {
+            self.core.clone_from(snapshot);
+            self.trace_state("fmi2SetFMUstate: restored");
+            Status::Ok
+        });
+        self.status(r)
     }
 
     /// Checks that fmi2FreeFMUstate may be called (it may, in every state but fatal).
     /// `is_null`: the host passed a pointer to NULL, so there is nothing to free.
     pub fn check_free_state(&mut self, is_null: bool) -> Status {
-        if !self.allowed("fmi2FreeFMUstate", mask::ANY_BUT_FATAL) {
-            return Status::Error;
-        }
-        let what = if is_null { "NULL, nothing to free" } else { "a snapshot" };
-        self.trace(format_args!("fmi2FreeFMUstate: {what}"));
-        Status::Ok
+        let r = self.allowed("fmi2FreeFMUstate", mask::ANY_BUT_FATAL).map(|()| {
+            let what = if is_null { "NULL, nothing to free" } else { "a snapshot" };
+            self.trace(format_args!("fmi2FreeFMUstate: {what}"));
+            Status::Ok
+        });
+        self.status(r)
     }
 
     /// fmi2SerializeFMUstate: the byte form of a snapshot ([`state`] documents the format).
     pub fn serialize(&mut self, snapshot: &Core) -> Result<Vec<u8>, Status> {
-        if !self.allowed("fmi2SerializeFMUstate", mask::GET | mask::INSTANTIATED) {
-            return Err(Status::Error);
-        }
-        let bytes = state::serialize(snapshot);
-        self.trace(format_args!("fmi2SerializeFMUstate: {} bytes", bytes.len()));
-        Ok(bytes)
+        let r = self.allowed("fmi2SerializeFMUstate", mask::GET | mask::INSTANTIATED).map(|()| {
+            let bytes = state::serialize(snapshot);
+            self.trace(format_args!("fmi2SerializeFMUstate: {} bytes", bytes.len()));
+            bytes
+        });
+        self.edge(r)
     }
 
     /// fmi2SerializedFMUstateSize.
     pub fn serialized_size(&mut self, snapshot: &Core) -> Result<usize, Status> {
-        if !self.allowed("fmi2SerializedFMUstateSize", mask::GET | mask::INSTANTIATED) {
-            return Err(Status::Error);
-        }
-        let n = state::serialize(snapshot).len();
-        self.trace(format_args!("fmi2SerializedFMUstateSize: {n} bytes"));
-        Ok(n)
+        const F: &str = "fmi2SerializedFMUstateSize";
+        let r = self.allowed(F, mask::GET | mask::INSTANTIATED).map(|()| {
+            let n = state::serialize(snapshot).len();
+            self.trace(format_args!("{F}: {n} bytes"));
+            n
+        });
+        self.edge(r)
     }
 
     /// fmi2DeSerializeFMUstate: a snapshot from untrusted bytes. Every field is checked;
     /// malformed bytes give an error that says what is wrong.
     pub fn deserialize(&mut self, bytes: &[u8]) -> Result<Box<Core>, Status> {
         const F: &str = "fmi2DeSerializeFMUstate";
-        if !self.allowed(F, mask::GET | mask::INSTANTIATED) {
-            return Err(Status::Error);
-        }
-        let n = bytes.len();
-        let core = state::deserialize(bytes)
-            .map(Box::new)
-            .map_err(|e| self.fail(Status::Error, format!("{F}: {e}")))?;
-        self.trace(format_args!("{F}: {n} bytes, a snapshot in state `{}`", core.state.name()));
-        Ok(core)
+        let r = self.allowed(F, mask::GET | mask::INSTANTIATED).and_then(|()| {
+            let core = state::deserialize(bytes)
+                .map(Box::new)
+                .map_err(|e| FmiError::error(format!("{F}: {e}")))?;
+            let n = bytes.len();
+            self.trace(format_args!("{F}: {n} bytes, a snapshot in state `{}`", core.state.name()));
+            Ok(core)
+        });
+        self.edge(r)
     }
 }
 

@@ -17,10 +17,11 @@
 //! history (`Bdf::check_state`). Malformed bytes give an error, never a panic.
 #![forbid(unsafe_code)]
 
-use super::instance::{Core, State, Values};
+use super::binding::{PhiSource, Values};
+use super::core::{Core, State};
 use super::variables::{guid, Causality, VARIABLES};
 use crate::model::{Formulation, Interpolation};
-use crate::solver::StateVisitor;
+use crate::solver::{check_rtol, StateVisitor};
 
 const MAGIC: &[u8; 8] = b"BBFMUST\0";
 /// Version of the byte format; bump it when [`visit_core`] changes.
@@ -196,8 +197,8 @@ fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), St
     let mut src = values.phi_source as u64;
     v.count("phi_source", &mut src);
     values.phi_source = match src {
-        0 => super::instance::PhiSource::Input,
-        1 => super::instance::PhiSource::Law,
+        0 => PhiSource::Input,
+        1 => PhiSource::Law,
         _ => return Err(format!("field `phi_source` = {src} is out of range")),
     };
     let mut interp = values.phi_interpolation as u64;
@@ -228,10 +229,8 @@ fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), St
 fn check_head(core: &Core) -> Result<(), String> {
     let s = &core.setup;
     if let Some(tol) = s.tolerance {
-        if !(tol.is_finite() && (1e-14..=1.0).contains(&tol)) {
-            return Err(format!(
-                "field `tolerance` = {tol:?} is out of range: must be in [1e-14, 1]"
-            ));
+        if let Err(allowed) = check_rtol(tol) {
+            return Err(format!("field `tolerance` = {tol:?} is out of range: must be {allowed}"));
         }
     }
     if !s.start_time.is_finite() {

@@ -30,7 +30,6 @@
 //! slope); φ′ jumps at every communication point, and the integrator restarts where φ″ does.
 
 use super::phi::{Phi, Poly};
-use crate::math;
 use crate::solver::{visit_usize, StateVisitor};
 
 /// How the pieces of a host's φ are built (the `phi_interpolation` setting).
@@ -254,8 +253,8 @@ impl HostSignal {
         }
         self.push(s);
         let (target, error) = self.extrapolate(h, true).ok_or(SignalError::NotFinite)?;
-        for k in 0..3 {
-            self.predicted_error[k] = error[k].max(self.last_error[k]);
+        for ((p, e), last) in self.predicted_error.iter_mut().zip(error).zip(self.last_error) {
+            *p = e.max(last);
         }
         self.last_error = error;
         finite(Poly::hermite_c2(s.t, h, start, target))
@@ -322,7 +321,7 @@ impl HostSignal {
         let oldest = self.history[self.len - 1].t;
         let newest = self.history[0].t;
         let span = newest - oldest;
-        if !(span > 0.0) {
+        if span.is_nan() || span <= 0.0 {
             return None;
         }
         let (z, c, n) = self.divided_differences(span, false, self.len);
@@ -532,6 +531,7 @@ fn newton(z: &[f64], c: &[f64], x: f64) -> (f64, f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math;
 
     fn smooth(degree: usize) -> HostSignal {
         HostSignal::new(Interpolation::Smooth, degree)

@@ -145,7 +145,9 @@ enum NewtonFail {
 /// it, so a clone continues exactly as the original would (FMU state save and restore).
 #[derive(Clone, Debug)]
 pub struct Bdf<const N: usize> {
-    cfg: BdfConfig<N>,
+    cfg: BdfConfig,
+    /// Absolute tolerance per state: `cfg.atol()` for each, unless [`set_atol`](Self::set_atol).
+    atol: SVector<f64, N>,
     /// t_n, the time of the last accepted step.
     t: f64,
     /// Nordsieck array z_j = hscale^j y^(j)(t_n)/j!.
@@ -194,7 +196,7 @@ pub struct Bdf<const N: usize> {
 
 impl<const N: usize> Bdf<N> {
     /// A solver at `(t0, y0)`. Nothing is evaluated until the first step.
-    pub fn new(cfg: BdfConfig<N>, t0: f64, y0: SVector<f64, N>) -> Result<Self, SolverError> {
+    pub fn new(cfg: BdfConfig, t0: f64, y0: SVector<f64, N>) -> Result<Self, SolverError> {
         cfg.validate()?;
         if !t0.is_finite() || !y0.iter().all(|v| v.is_finite()) {
             return Err(SolverError::NonFiniteState { t: t0 });
@@ -202,6 +204,7 @@ impl<const N: usize> Bdf<N> {
         let mut zn = [SVector::zeros(); NCOL];
         zn[0] = y0;
         Ok(Self {
+            atol: SVector::from_element(cfg.atol()),
             cfg,
             t: t0,
             zn,
@@ -232,6 +235,17 @@ impl<const N: usize> Bdf<N> {
             landing: None,
             stats: Stats::default(),
         })
+    }
+
+    /// A different absolute tolerance for each state, each positive and finite (the uniform
+    /// `cfg.atol()` otherwise), before the first step.
+    pub fn set_atol(&mut self, atol: SVector<f64, N>) -> Result<(), SolverError> {
+        if let Some(a) = atol.iter().find(|a| !(a.is_finite() && **a > 0.0)) {
+            let allowed = "positive and finite";
+            return Err(SolverError::InvalidConfig { field: "atol", value: *a, allowed });
+        }
+        self.atol = atol;
+        Ok(())
     }
 
     /// Restarts at `(t, y)` with order 1, for a discontinuity of f or of the state. Settings,
@@ -318,7 +332,7 @@ impl<const N: usize> Bdf<N> {
     }
 
     /// Settings.
-    pub fn config(&self) -> &BdfConfig<N> {
+    pub fn config(&self) -> &BdfConfig {
         &self.cfg
     }
 
@@ -1067,7 +1081,7 @@ impl<const N: usize> Bdf<N> {
 
     fn update_weights(&mut self) {
         let rtol = self.cfg.rtol;
-        self.ewt = self.zn[0].zip_map(&self.cfg.atol, |y, a| 1.0 / (rtol * y.abs() + a));
+        self.ewt = self.zn[0].zip_map(&self.atol, |y, a| 1.0 / (rtol * y.abs() + a));
     }
 
     /// Weighted root-mean-square norm with the current error weights.
@@ -1165,7 +1179,7 @@ mod tests {
 
     #[test]
     fn bad_settings_name_the_field() {
-        let cfg = BdfConfig { rtol: 0.0, ..BdfConfig::<1>::new(1e-6) };
+        let cfg = BdfConfig { rtol: 0.0, ..BdfConfig::new(1e-6) };
         let e = Bdf::new(cfg, 0.0, Vector1::new(1.0)).unwrap_err();
         assert!(e.to_string().contains("rtol"), "{e}");
         let e = Bdf::new(BdfConfig::new(1e-6), 0.0, Vector1::new(f64::NAN)).unwrap_err();
