@@ -983,12 +983,15 @@ mod tests {
     /// # Safety
     /// `c` is a live instance.
     unsafe fn to_step_complete(c: fmi2Component) {
-        let source = [Var::PhiSource.vr()];
-        assert_eq!(fmi2SetInteger(c, source.as_ptr(), 1, [2].as_ptr()), OK);
-        assert_eq!(fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0), OK);
-        assert_eq!(fmi2EnterInitializationMode(c), OK);
-        assert_eq!(fmi2ExitInitializationMode(c), OK);
-        assert_eq!(fmi2DoStep(c, 0.0, 0.01, fmi2False), OK);
+        // SAFETY: as this function's contract says.
+        unsafe {
+            let source = [Var::PhiSource.vr()];
+            assert_eq!(fmi2SetInteger(c, source.as_ptr(), 1, [2].as_ptr()), OK);
+            assert_eq!(fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0), OK);
+            assert_eq!(fmi2EnterInitializationMode(c), OK);
+            assert_eq!(fmi2ExitInitializationMode(c), OK);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.01, fmi2False), OK);
+        }
     }
 
     /// Each of the 30 functions that take an instance, called on `c` with arguments that are
@@ -1002,81 +1005,99 @@ mod tests {
         snap: fmi2FMUstate,
         bytes: &[u8],
     ) -> Vec<(&'static str, fmi2Status)> {
-        let (rv, iv, bv) = ([Var::Phi.vr()], [Var::MaxOrder.vr()], [Var::StabilityGuard.vr()]);
-        let (mut r, mut i, mut b) = ([0.5], [3], [fmi2True]);
-        let mut string: [fmi2String; 1] = [null()];
-        let cats = [c"logAll".as_ptr()];
-        let mut fresh: fmi2FMUstate = null_mut();
-        let mut existing = snap;
-        let mut none: fmi2FMUstate = null_mut();
-        let mut size = 0usize;
-        let mut out = vec![0u8; bytes.len()];
-        let (mut k, mut flag) = (-1, -1);
-        let bp = bytes.as_ptr() as *const fmi2Byte;
-        let op = out.as_mut_ptr() as *mut fmi2Byte;
-        let outputs = [Var::V1.vr()];
-        let calls = vec![
-            ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2True, 1, cats.as_ptr())),
-            ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2False, 0, null())),
-            ("fmi2SetupExperiment", fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0)),
-            ("fmi2EnterInitializationMode", fmi2EnterInitializationMode(c)),
-            ("fmi2ExitInitializationMode", fmi2ExitInitializationMode(c)),
-            ("fmi2Terminate", fmi2Terminate(c)),
-            ("fmi2Reset", fmi2Reset(c)),
-            ("fmi2GetReal", fmi2GetReal(c, rv.as_ptr(), 1, r.as_mut_ptr())),
-            ("fmi2GetReal", fmi2GetReal(c, null(), 0, null_mut())),
-            ("fmi2GetReal", fmi2GetReal(c, null(), 1, null_mut())),
-            ("fmi2GetInteger", fmi2GetInteger(c, iv.as_ptr(), 1, i.as_mut_ptr())),
-            ("fmi2GetBoolean", fmi2GetBoolean(c, bv.as_ptr(), 1, b.as_mut_ptr())),
-            ("fmi2GetString", fmi2GetString(c, null(), 0, string.as_mut_ptr())),
-            ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [0.25].as_ptr())),
-            ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [f64::NAN].as_ptr())),
-            ("fmi2SetInteger", fmi2SetInteger(c, iv.as_ptr(), 1, [3].as_ptr())),
-            ("fmi2SetBoolean", fmi2SetBoolean(c, bv.as_ptr(), 1, [fmi2False].as_ptr())),
-            ("fmi2SetString", fmi2SetString(c, null(), 0, null())),
-            ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut fresh)),
-            ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut existing)),
-            ("fmi2SetFMUstate", fmi2SetFMUstate(c, snap)),
-            ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut existing)),
-            ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut none)),
-            ("fmi2SerializedFMUstateSize", fmi2SerializedFMUstateSize(c, snap, &mut size)),
-            ("fmi2SerializeFMUstate", fmi2SerializeFMUstate(c, snap, op, out.len())),
-            ("fmi2DeSerializeFMUstate", fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut fresh)),
-            ("fmi2DeSerializeFMUstate", fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut existing)),
-            (
-                "fmi2GetDirectionalDerivative",
-                fmi2GetDirectionalDerivative(
-                    c,
-                    outputs.as_ptr(),
-                    1,
-                    rv.as_ptr(),
-                    1,
-                    [1.0].as_ptr(),
-                    r.as_mut_ptr(),
+        // SAFETY: as this function's contract says.
+        unsafe {
+            let (rv, iv, bv) = ([Var::Phi.vr()], [Var::MaxOrder.vr()], [Var::StabilityGuard.vr()]);
+            let (mut r, mut i, mut b) = ([0.5], [3], [fmi2True]);
+            let mut string: [fmi2String; 1] = [null()];
+            let cats = [c"logAll".as_ptr()];
+            let mut fresh: fmi2FMUstate = null_mut();
+            let mut existing = snap;
+            let mut none: fmi2FMUstate = null_mut();
+            let mut size = 0usize;
+            let mut out = vec![0u8; bytes.len()];
+            let (mut k, mut flag) = (-1, -1);
+            let bp = bytes.as_ptr() as *const fmi2Byte;
+            let op = out.as_mut_ptr() as *mut fmi2Byte;
+            let outputs = [Var::V1.vr()];
+            let calls = vec![
+                ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2True, 1, cats.as_ptr())),
+                ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2False, 0, null())),
+                (
+                    "fmi2SetupExperiment",
+                    fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0),
                 ),
-            ),
-            (
-                "fmi2SetRealInputDerivatives",
-                fmi2SetRealInputDerivatives(c, rv.as_ptr(), 1, [1].as_ptr(), [0.5].as_ptr()),
-            ),
-            (
-                "fmi2GetRealOutputDerivatives",
-                fmi2GetRealOutputDerivatives(c, outputs.as_ptr(), 1, [1].as_ptr(), r.as_mut_ptr()),
-            ),
-            ("fmi2DoStep", fmi2DoStep(c, 0.01, 0.01, fmi2False)),
-            ("fmi2CancelStep", fmi2CancelStep(c)),
-            ("fmi2GetStatus", fmi2GetStatus(c, 0, &mut k)),
-            ("fmi2GetRealStatus", fmi2GetRealStatus(c, 2, r.as_mut_ptr())),
-            ("fmi2GetIntegerStatus", fmi2GetIntegerStatus(c, 0, &mut k)),
-            ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(c, 3, &mut flag)),
-            ("fmi2GetStringStatus", fmi2GetStringStatus(c, 1, string.as_mut_ptr())),
-        ];
-        // Nothing was written through an output argument.
-        assert!(fresh.is_null() && existing == snap && none.is_null());
-        assert!(out.iter().all(|x| *x == 0) && size == 0);
-        assert_eq!((r, i, b, k, flag), ([0.5], [3], [fmi2True], -1, -1));
-        assert!(string[0].is_null());
-        calls
+                ("fmi2EnterInitializationMode", fmi2EnterInitializationMode(c)),
+                ("fmi2ExitInitializationMode", fmi2ExitInitializationMode(c)),
+                ("fmi2Terminate", fmi2Terminate(c)),
+                ("fmi2Reset", fmi2Reset(c)),
+                ("fmi2GetReal", fmi2GetReal(c, rv.as_ptr(), 1, r.as_mut_ptr())),
+                ("fmi2GetReal", fmi2GetReal(c, null(), 0, null_mut())),
+                ("fmi2GetReal", fmi2GetReal(c, null(), 1, null_mut())),
+                ("fmi2GetInteger", fmi2GetInteger(c, iv.as_ptr(), 1, i.as_mut_ptr())),
+                ("fmi2GetBoolean", fmi2GetBoolean(c, bv.as_ptr(), 1, b.as_mut_ptr())),
+                ("fmi2GetString", fmi2GetString(c, null(), 0, string.as_mut_ptr())),
+                ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [0.25].as_ptr())),
+                ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [f64::NAN].as_ptr())),
+                ("fmi2SetInteger", fmi2SetInteger(c, iv.as_ptr(), 1, [3].as_ptr())),
+                ("fmi2SetBoolean", fmi2SetBoolean(c, bv.as_ptr(), 1, [fmi2False].as_ptr())),
+                ("fmi2SetString", fmi2SetString(c, null(), 0, null())),
+                ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut fresh)),
+                ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut existing)),
+                ("fmi2SetFMUstate", fmi2SetFMUstate(c, snap)),
+                ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut existing)),
+                ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut none)),
+                ("fmi2SerializedFMUstateSize", fmi2SerializedFMUstateSize(c, snap, &mut size)),
+                ("fmi2SerializeFMUstate", fmi2SerializeFMUstate(c, snap, op, out.len())),
+                (
+                    "fmi2DeSerializeFMUstate",
+                    fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut fresh),
+                ),
+                (
+                    "fmi2DeSerializeFMUstate",
+                    fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut existing),
+                ),
+                (
+                    "fmi2GetDirectionalDerivative",
+                    fmi2GetDirectionalDerivative(
+                        c,
+                        outputs.as_ptr(),
+                        1,
+                        rv.as_ptr(),
+                        1,
+                        [1.0].as_ptr(),
+                        r.as_mut_ptr(),
+                    ),
+                ),
+                (
+                    "fmi2SetRealInputDerivatives",
+                    fmi2SetRealInputDerivatives(c, rv.as_ptr(), 1, [1].as_ptr(), [0.5].as_ptr()),
+                ),
+                (
+                    "fmi2GetRealOutputDerivatives",
+                    fmi2GetRealOutputDerivatives(
+                        c,
+                        outputs.as_ptr(),
+                        1,
+                        [1].as_ptr(),
+                        r.as_mut_ptr(),
+                    ),
+                ),
+                ("fmi2DoStep", fmi2DoStep(c, 0.01, 0.01, fmi2False)),
+                ("fmi2CancelStep", fmi2CancelStep(c)),
+                ("fmi2GetStatus", fmi2GetStatus(c, 0, &mut k)),
+                ("fmi2GetRealStatus", fmi2GetRealStatus(c, 2, r.as_mut_ptr())),
+                ("fmi2GetIntegerStatus", fmi2GetIntegerStatus(c, 0, &mut k)),
+                ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(c, 3, &mut flag)),
+                ("fmi2GetStringStatus", fmi2GetStringStatus(c, 1, string.as_mut_ptr())),
+            ];
+            // Nothing was written through an output argument.
+            assert!(fresh.is_null() && existing == snap && none.is_null());
+            assert!(out.iter().all(|x| *x == 0) && size == 0);
+            assert_eq!((r, i, b, k, flag), ([0.5], [3], [fmi2True], -1, -1));
+            assert!(string[0].is_null());
+            calls
+        }
     }
 
     /// The fatal state, which only a panic reaches, for all 34 functions (FMI 2.0 §2.1.3:
