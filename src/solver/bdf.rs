@@ -141,6 +141,13 @@ enum NewtonFail {
     Singular,
 }
 
+/// Failed attempts of the current step, by kind.
+#[derive(Default)]
+struct Failures {
+    newton: u32,
+    error_test: u32,
+}
+
 /// The integrator state: history, order, step, Newton matrix, counters. `Clone` copies all of
 /// it, so a clone continues exactly as the original would (FMU state save and restore).
 #[derive(Clone, Debug)]
@@ -417,7 +424,9 @@ impl<const N: usize> Bdf<N> {
     }
 
     /// Takes one step, never past `tstop`. A step whose end falls within round-off of `tstop`
-    /// ends exactly on it.
+    /// ends exactly on it. As CVODE's cvStep: attempts until one converges and passes the
+    /// error test, each failure handled by its own function (cvHandleNFlag,
+    /// cvHandleErrorTestFailure), then the completion and the choice of the next step.
     pub fn step<S: OdeSystem<N>>(
         &mut self,
         sys: &S,
@@ -431,8 +440,7 @@ impl<const N: usize> Bdf<N> {
         } else {
             self.apply_pending(tstop);
         }
-        let mut error_failures = 0u32;
-        let mut newton_failures = 0u32;
+        let mut failures = Failures::default();
         let mut conv_fail = ConvFail::None;
         let dsm = loop {
             self.check_step_size()?;
@@ -441,84 +449,17 @@ impl<const N: usize> Bdf<N> {
             self.set_coeffs();
             if let Err(why) = self.newton(sys, conv_fail) {
                 self.restore(t_prior);
-                newton_failures += 1;
-                self.stats.newton_failures += 1;
-                self.eta_max = 1.0;
-                let at_floor = self.h.abs() <= self.cfg.h_min * (1.0 + 1e-12);
-                if newton_failures >= MAX_NEWTON_FAILURES
-                    || at_floor
-                    || self.cfg.fixed_step.is_some()
-                {
-                    return Err(match why {
-                        NewtonFail::NonFinite => SolverError::NonFiniteRhs { t: self.t },
-                        NewtonFail::Singular => {
-                            SolverError::SingularMatrix { t: self.t, h: self.h }
-                        }
-                        NewtonFail::Diverged => SolverError::NewtonFailures {
-                            t: self.t,
-                            h: self.h,
-                            failures: newton_failures,
-                        },
-                    });
-                }
-                let eta = ETA_NEWTON_FAIL.max(self.cfg.h_min / self.h.abs());
-                self.rescale(eta);
+                self.handle_newton_failure(why, &mut failures)?;
                 conv_fail = ConvFail::Other;
                 continue;
             }
-            // Projection (CVODE's cvDoProjection): the Nordsieck array takes the projected
-            // solution, and the error test measures the local error estimate projected onto
-            // the manifold (CVODE's default, CVodeSetProjErrEst), here as P(y + e) − P(y):
-            // the normal part of the correction is not an error of the step.
-            let mut projected_error = None;
-            if let Some(yp) = sys.project(self.t, &(self.zn[0] + self.acor)) {
-                projected_error = sys.project(self.t, &(yp + self.acor)).map(|y| y - yp);
-                self.acor = yp - self.zn[0];
-            }
-            let dsm = self.wrms(projected_error.as_ref().unwrap_or(&self.acor)) * self.coeffs.tq[2];
+            let dsm = self.local_error(sys);
             if dsm <= 1.0 || self.cfg.fixed_step.is_some() {
                 break dsm;
             }
-            // Local error test failed (CVODE cvHandleNFlag / cvDoErrorTest).
             self.restore(t_prior);
-            error_failures += 1;
-            self.stats.error_test_failures += 1;
-            self.eta_max = 1.0;
+            self.handle_error_test_failure(sys, dsm, &mut failures)?;
             conv_fail = ConvFail::ErrorTest;
-            if error_failures >= MAX_ERROR_FAILURES {
-                return Err(SolverError::ErrorTestFailures {
-                    t: self.t,
-                    h: self.h,
-                    failures: error_failures,
-                });
-            }
-            let floor = self.cfg.h_min / self.h.abs();
-            if error_failures < ERROR_FAILURES_ORDER_DROP {
-                let mut eta = step_ratio(BIAS_SAME, dsm, self.q + 1);
-                eta = eta.max(ETA_MIN).max(floor);
-                if error_failures >= ERROR_FAILURES_GROWTH_CAP {
-                    eta = eta.min(ETA_MAX_AFTER_FAILURES);
-                }
-                self.rescale(eta);
-            } else if self.q > 1 {
-                // Repeated failures: the history is suspect; drop the order.
-                lower_order(&mut self.zn, self.q, self.hscale, &self.tau);
-                self.q -= 1;
-                self.qwait = self.q + 1;
-                self.rescale(ETA_MIN.max(floor));
-            } else {
-                // Order 1 already: restart from a fresh derivative.
-                self.h *= ETA_MIN.max(floor);
-                self.hscale = self.h;
-                self.landing = None;
-                self.qwait = LONG_WAIT;
-                let (t, y) = (self.t, self.zn[0]);
-                let f = self.eval_rhs(sys, t, &y);
-                if !f.iter().all(|v| v.is_finite()) {
-                    return Err(SolverError::NonFiniteRhs { t: self.t });
-                }
-                self.zn[1] = f * self.h;
-            }
         };
         self.complete_step();
         self.choose_next(dsm);
@@ -534,6 +475,95 @@ impl<const N: usize> Bdf<N> {
             return Err(SolverError::OutOfRange { t: self.t, name, value, allowed });
         }
         Ok(outcome)
+    }
+
+    /// After a failed Newton iteration (CVODE cvHandleNFlag): gives up after
+    /// MAX_NEWTON_FAILURES, at the smallest step or in fixed-step mode; else shrinks the step.
+    fn handle_newton_failure(
+        &mut self,
+        why: NewtonFail,
+        failures: &mut Failures,
+    ) -> Result<(), SolverError> {
+        failures.newton += 1;
+        self.stats.newton_failures += 1;
+        self.eta_max = 1.0;
+        let at_floor = self.h.abs() <= self.cfg.h_min * (1.0 + 1e-12);
+        if failures.newton >= MAX_NEWTON_FAILURES || at_floor || self.cfg.fixed_step.is_some() {
+            return Err(match why {
+                NewtonFail::NonFinite => SolverError::NonFiniteRhs { t: self.t },
+                NewtonFail::Singular => SolverError::SingularMatrix { t: self.t, h: self.h },
+                NewtonFail::Diverged => {
+                    SolverError::NewtonFailures { t: self.t, h: self.h, failures: failures.newton }
+                }
+            });
+        }
+        let eta = ETA_NEWTON_FAIL.max(self.cfg.h_min / self.h.abs());
+        self.rescale(eta);
+        Ok(())
+    }
+
+    /// The weighted norm of the step's local error estimate, in units of the tolerance.
+    ///
+    /// Projection (CVODE's cvDoProjection): the Nordsieck array takes the projected solution,
+    /// and the error test measures the local error estimate projected onto the manifold
+    /// (CVODE's default, CVodeSetProjErrEst), here as P(y + e) − P(y): the normal part of the
+    /// correction is not an error of the step.
+    fn local_error<S: OdeSystem<N>>(&mut self, sys: &S) -> f64 {
+        let mut projected_error = None;
+        if let Some(yp) = sys.project(self.t, &(self.zn[0] + self.acor)) {
+            projected_error = sys.project(self.t, &(yp + self.acor)).map(|y| y - yp);
+            self.acor = yp - self.zn[0];
+        }
+        self.wrms(projected_error.as_ref().unwrap_or(&self.acor)) * self.coeffs.tq[2]
+    }
+
+    /// After a failed error test (CVODE cvDoErrorTest's failure branch): gives up after
+    /// MAX_ERROR_FAILURES; else shrinks the step by the error's ratio, then, after repeated
+    /// failures, drops the order, and at order 1 restarts from a fresh derivative.
+    fn handle_error_test_failure<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        dsm: f64,
+        failures: &mut Failures,
+    ) -> Result<(), SolverError> {
+        failures.error_test += 1;
+        self.stats.error_test_failures += 1;
+        self.eta_max = 1.0;
+        if failures.error_test >= MAX_ERROR_FAILURES {
+            return Err(SolverError::ErrorTestFailures {
+                t: self.t,
+                h: self.h,
+                failures: failures.error_test,
+            });
+        }
+        let floor = self.cfg.h_min / self.h.abs();
+        if failures.error_test < ERROR_FAILURES_ORDER_DROP {
+            let mut eta = step_ratio(BIAS_SAME, dsm, self.q + 1);
+            eta = eta.max(ETA_MIN).max(floor);
+            if failures.error_test >= ERROR_FAILURES_GROWTH_CAP {
+                eta = eta.min(ETA_MAX_AFTER_FAILURES);
+            }
+            self.rescale(eta);
+        } else if self.q > 1 {
+            // Repeated failures: the history is suspect; drop the order.
+            lower_order(&mut self.zn, self.q, self.hscale, &self.tau);
+            self.q -= 1;
+            self.qwait = self.q + 1;
+            self.rescale(ETA_MIN.max(floor));
+        } else {
+            // Order 1 already: restart from a fresh derivative.
+            self.h *= ETA_MIN.max(floor);
+            self.hscale = self.h;
+            self.landing = None;
+            self.qwait = LONG_WAIT;
+            let (t, y) = (self.t, self.zn[0]);
+            let f = self.eval_rhs(sys, t, &y);
+            if !f.iter().all(|v| v.is_finite()) {
+                return Err(SolverError::NonFiniteRhs { t: self.t });
+            }
+            self.zn[1] = f * self.h;
+        }
+        Ok(())
     }
 
     // ----- state save and restore (FMI) --------------------------------------------------
@@ -972,52 +1002,17 @@ impl<const N: usize> Bdf<N> {
             self.q_next = (self.q + 1).min(fixed.order);
             return;
         }
-        let q = self.q;
-        let (mut q_next, mut eta) = (q, 1.0);
+        let (mut q_next, mut eta) = (self.q, 1.0);
         if self.eta_max > 1.0 {
-            if self.qwait != 0 {
-                // Only a growth by ETA_THRESHOLD or more changes the step. Below
-                // (BIAS_SAME·dsm > (1/ETA_THRESHOLD − ADDON)^(q+1)) the ratio need not be
-                // computed: this saves a powf in most steps.
-                let grows =
-                    BIAS_SAME * dsm <= math::powi(1.0 / ETA_THRESHOLD - ADDON, q as i32 + 1);
-                eta = if grows { step_ratio(BIAS_SAME, dsm, q + 1) } else { 1.0 };
+            (q_next, eta) = if self.qwait != 0 {
+                (self.q, self.eta_same_order(dsm))
             } else {
-                // The candidates compared by log((bias·err)^(1/k)), the smallest giving the
-                // largest η: three logarithms and at most one exp cost less than three powf.
-                let log_root = |bias: f64, err: f64, k: usize| math::ln(bias * err) / k as f64;
-                let log_same = log_root(BIAS_SAME, dsm, q + 1);
                 self.qwait = 2;
-                let log_down = if q > 1 {
-                    let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
-                    log_root(BIAS_DOWN, ddn, q)
-                } else {
-                    f64::INFINITY
-                };
-                let qmax = self.cfg.max_order;
-                let log_up = if q != qmax && self.saved_tq5 != 0.0 {
-                    let ratio = (self.coeffs.tq[5] / self.saved_tq5)
-                        * math::powi(self.h / self.tau[2], q as i32 + 1);
-                    let diff = self.acor - self.zn[qmax] * ratio;
-                    let dup = self.wrms(&diff) * self.coeffs.tq[3];
-                    log_root(BIAS_UP, dup, q + 2)
-                } else {
-                    f64::INFINITY
-                };
-                let mut best = log_same;
-                if log_down < best && log_down <= log_up {
-                    best = log_down;
-                    q_next = q - 1;
-                } else if log_up < best {
-                    best = log_up;
-                    q_next = q + 1;
-                    self.zn[qmax] = self.acor;
-                }
-                eta = 1.0 / (math::exp(best) + ADDON);
-            }
+                self.eta_and_order(dsm)
+            };
             if eta < ETA_THRESHOLD {
                 eta = 1.0;
-                q_next = q;
+                q_next = self.q;
             } else {
                 eta = self.limit_growth(eta);
             }
@@ -1036,6 +1031,56 @@ impl<const N: usize> Bdf<N> {
         }
         self.q_next = q_next;
         self.h_next = self.h * eta;
+    }
+
+    /// The step ratio at the same order (CVODE cvSetEta's case without an order change).
+    /// Only a growth by ETA_THRESHOLD or more changes the step. Below
+    /// (BIAS_SAME·dsm > (1/ETA_THRESHOLD − ADDON)^(q+1)) the ratio need not be computed:
+    /// this saves a powf in most steps.
+    fn eta_same_order(&self, dsm: f64) -> f64 {
+        let q = self.q;
+        let grows = BIAS_SAME * dsm <= math::powi(1.0 / ETA_THRESHOLD - ADDON, q as i32 + 1);
+        if grows {
+            step_ratio(BIAS_SAME, dsm, q + 1)
+        } else {
+            1.0
+        }
+    }
+
+    /// The order among q − 1, q, q + 1 that allows the largest step, and that step's ratio
+    /// (CVODE cvChooseEta, from the error estimates of cvComputeEtaqm1 and cvComputeEtaqp1).
+    /// The candidates are compared by log((bias·err)^(1/k)), the smallest giving the largest
+    /// η: three logarithms and at most one exp cost less than three powf.
+    fn eta_and_order(&mut self, dsm: f64) -> (usize, f64) {
+        let q = self.q;
+        let log_root = |bias: f64, err: f64, k: usize| math::ln(bias * err) / k as f64;
+        let log_same = log_root(BIAS_SAME, dsm, q + 1);
+        let log_down = if q > 1 {
+            let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
+            log_root(BIAS_DOWN, ddn, q)
+        } else {
+            f64::INFINITY
+        };
+        let qmax = self.cfg.max_order;
+        let log_up = if q != qmax && self.saved_tq5 != 0.0 {
+            let ratio = (self.coeffs.tq[5] / self.saved_tq5)
+                * math::powi(self.h / self.tau[2], q as i32 + 1);
+            let diff = self.acor - self.zn[qmax] * ratio;
+            let dup = self.wrms(&diff) * self.coeffs.tq[3];
+            log_root(BIAS_UP, dup, q + 2)
+        } else {
+            f64::INFINITY
+        };
+        let (mut best, mut q_next) = (log_same, q);
+        if log_down < best && log_down <= log_up {
+            best = log_down;
+            q_next = q - 1;
+        } else if log_up < best {
+            best = log_up;
+            q_next = q + 1;
+            self.zn[qmax] = self.acor;
+        }
+        (q_next, 1.0 / (math::exp(best) + ADDON))
     }
 
     /// The order k ≤ `limit` (and ≤ q) and step ratio η with the largest step among those the
