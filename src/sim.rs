@@ -8,7 +8,7 @@
 
 use crate::model::{
     BeamBody, DaeSystem, Formulation, HostSignal, Interpolation, Outputs, PaperLaw, ParamError,
-    Params, PhiPiece, Poly, Sample, TwoDofSystem, HISTORY,
+    Params, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem, HISTORY,
 };
 use crate::solver::{check_rtol, Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
 use nalgebra::SVector;
@@ -57,6 +57,9 @@ pub struct Scene {
     /// How the sampled feeds are interpolated between communication points. Default
     /// [`Interpolation::Smooth`].
     pub phi_interpolation: Interpolation,
+    /// What the run does when the state leaves the range of validity. Default
+    /// [`RangeCheck::Stop`].
+    pub range_check: RangeCheck,
 }
 
 impl Default for Scene {
@@ -73,12 +76,13 @@ impl Default for Scene {
             dt_comm: 0.01,
             phi_extrapolation: HISTORY - 1,
             phi_interpolation: Interpolation::Smooth,
+            range_check: RangeCheck::Stop,
         }
     }
 }
 
 /// Names [`Scene::set`] accepts besides the model parameters.
-pub const SCENE_KEYS: [&str; 20] = [
+pub const SCENE_KEYS: [&str; 21] = [
     "t_rot",
     "phi_end",
     "phi0",
@@ -99,6 +103,7 @@ pub const SCENE_KEYS: [&str; 20] = [
     "dt_comm",
     "phi_extrapolation",
     "phi_interpolation",
+    "range_check",
 ];
 
 impl Scene {
@@ -115,6 +120,10 @@ impl Scene {
                 "false" | "0" => false,
                 _ => return Err(format!("`stability_guard` = {text}: must be true or false")),
             };
+            return Ok(());
+        }
+        if name == "range_check" {
+            self.range_check = text.parse()?;
             return Ok(());
         }
         if name == "phi_interpolation" {
@@ -287,40 +296,57 @@ fn grid(step: f64, t_end: f64) -> impl Iterator<Item = f64> {
     (0..=last).map(move |k| if k == last { t_end } else { k as f64 * step })
 }
 
-/// Runs the scene, calling `sink` with the outputs at every output time. Returns the
-/// integrator's counters.
-pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Stats, SimError> {
+/// What a finished run reports besides its outputs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// The integrator's counters.
+    pub stats: Stats,
+    /// With `range_check = warn`: where the run left the range of validity.
+    pub warning: Option<String>,
+}
+
+/// Runs the scene, calling `sink` with the outputs at every output time.
+pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Report, SimError> {
     let model = scene.validate()?;
     let (law, solver, init) = (scene.law, &scene.solver, scene.initial);
-    let mut emit = |run: &Run, t: f64| {
+    let mut warning = None;
+    let mut emit = |run: &mut Run, t: f64| {
+        if let Some(w) = run.take_warning() {
+            warning = Some(w);
+        }
         sink(&run.outputs_at(t)?);
         Ok(())
     };
     let outputs = scene.output_times();
-    if scene.phi_feed == PhiFeed::Law {
+    let mut run = if scene.phi_feed == PhiFeed::Law {
         let mut run = Run::with_law(model, scene.formulation, solver, 0.0, init, law)?;
+        run.set_range_check(scene.range_check);
         run.step_to_sampling(scene.t_end, outputs, &mut emit)?;
-        return Ok(run.stats());
-    }
-    // As a host does: the law's value (and derivatives) at each communication point.
-    let sample = |t: f64| match scene.phi_feed {
-        PhiFeed::Derivatives => Sample::with_derivatives(t, law.eval(t)),
-        _ => Sample::value(t, law.eval(t).phi),
-    };
-    let signal = HostSignal::new(scene.phi_interpolation, scene.phi_extrapolation);
-    let mut run = Run::with_host(model, scene.formulation, solver, 0.0, init, signal, sample(0.0))?;
-    let mut outputs = outputs.peekable();
-    let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
-    for w in comm.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        run.set_sample(sample(a));
-        let mut times = Vec::new();
-        while let Some(t) = outputs.next_if(|&t| t <= b) {
-            times.push(t);
+        run
+    } else {
+        // As a host does: the law's value (and derivatives) at each communication point.
+        let sample = |t: f64| match scene.phi_feed {
+            PhiFeed::Derivatives => Sample::with_derivatives(t, law.eval(t)),
+            _ => Sample::value(t, law.eval(t).phi),
+        };
+        let signal = HostSignal::new(scene.phi_interpolation, scene.phi_extrapolation);
+        let mut run =
+            Run::with_host(model, scene.formulation, solver, 0.0, init, signal, sample(0.0))?;
+        run.set_range_check(scene.range_check);
+        let mut outputs = outputs.peekable();
+        let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
+        for w in comm.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            run.set_sample(sample(a));
+            let mut times = Vec::new();
+            while let Some(t) = outputs.next_if(|&t| t <= b) {
+                times.push(t);
+            }
+            run.step_to_sampling(b, times, &mut emit)?;
         }
-        run.step_to_sampling(b, times, &mut emit)?;
-    }
-    Ok(run.stats())
+        run
+    };
+    Ok(Report { stats: run.stats(), warning: warning.or_else(|| run.take_warning()) })
 }
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
@@ -347,6 +373,12 @@ pub struct Run {
     piece: PhiPiece,
     /// The host's sample at the current time, for the next step.
     sample: Option<Sample>,
+    /// What to do when the state leaves the range of validity, as set, and now: `Warn`
+    /// becomes `Off` once it has warned.
+    range_set: RangeCheck,
+    range: RangeCheck,
+    /// The warning of `Warn`, until [`take_warning`](Self::take_warning).
+    warning: Option<String>,
     bdf: Integrator,
 }
 
@@ -356,11 +388,12 @@ fn within_rounding(a: f64, b: f64) -> bool {
 }
 
 fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
-    TwoDofSystem { model, phi, linear: formulation == Formulation::Linear }
+    TwoDofSystem { model, phi, linear: formulation == Formulation::Linear, range_check: true }
 }
 
 fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
-    DaeSystem { model, phi, stabilized: formulation == Formulation::DaeStabilized }
+    let stabilized = formulation == Formulation::DaeStabilized;
+    DaeSystem { model, phi, stabilized, range_check: true }
 }
 
 /// Four states (reduced, linear) or six (dae, dae-stabilized). The variants differ by
@@ -417,7 +450,17 @@ impl Run {
             let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
             Integrator::Two(Bdf::new(*options, t0, y0)?)
         };
-        Ok(Self { model, formulation, input, piece, sample: None, bdf })
+        Ok(Self {
+            model,
+            formulation,
+            input,
+            piece,
+            sample: None,
+            range_set: RangeCheck::Stop,
+            range: RangeCheck::Stop,
+            warning: None,
+            bdf,
+        })
     }
 
     pub fn model(&self) -> &BeamBody {
@@ -475,7 +518,7 @@ impl Run {
         &mut self,
         t: f64,
         times: impl IntoIterator<Item = f64>,
-        mut sink: impl FnMut(&Run, f64) -> Result<(), SimError>,
+        mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
     ) -> Result<(), SimError> {
         let (t0, piece, input, sample) = (self.t(), self.piece, self.input, self.sample);
         let result = self.begin(t).and_then(|()| {
@@ -587,16 +630,47 @@ impl Run {
     }
 
     /// Steps with the current piece until t ≥ `tout`, never past `tstop`
-    /// ([`Bdf::advance`]). A `tout` within rounding of the solver's time takes no step.
+    /// ([`Bdf::advance`]). A `tout` within rounding of the solver's time takes no step. With
+    /// `range_check = warn`, the first step out of the range of validity records a warning
+    /// and the run goes on without the check.
     fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
-        if tout > self.t() && within_rounding(tout, self.t()) {
-            return Ok(());
+        loop {
+            if tout > self.t() && within_rounding(tout, self.t()) {
+                return Ok(());
+            }
+            let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
+            let range_check = self.range != RangeCheck::Off;
+            let result = match &mut self.bdf {
+                Integrator::Two(b) => {
+                    let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
+                    b.advance(&sys, tout, tstop)
+                }
+                Integrator::Dae(b) => {
+                    let sys = DaeSystem { range_check, ..dae(model, piece, formulation) };
+                    b.advance(&sys, tout, tstop)
+                }
+            };
+            match result {
+                Err(e @ SolverError::OutOfRange { .. }) if self.range == RangeCheck::Warn => {
+                    self.warning = Some(format!(
+                        "{e}; the run goes on outside the range of validity (range_check = warn)"
+                    ));
+                    self.range = RangeCheck::Off;
+                }
+                other => return other,
+            }
         }
-        let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
-        match &mut self.bdf {
-            Integrator::Two(b) => b.advance(&two_dof(model, piece, formulation), tout, tstop),
-            Integrator::Dae(b) => b.advance(&dae(model, piece, formulation), tout, tstop),
-        }
+    }
+
+    /// What to do when the state leaves the range of validity (default `Stop`).
+    pub fn set_range_check(&mut self, range: RangeCheck) {
+        self.range_set = range;
+        self.range = range;
+    }
+
+    /// The warning of `range_check = warn`, once: `Some` after the step that left the range.
+    pub fn take_warning(&mut self) -> Option<String> {
+        self.warning.take()
     }
 
     /// The outputs at `t` inside the last step (dense output), with the current piece.
@@ -662,6 +736,14 @@ impl Run {
         if let PhiInput::Host(signal) = &mut self.input {
             signal.visit(v);
         }
+        let mut warned = self.range != self.range_set;
+        v.flag("range_warned", &mut warned);
+        self.range = if warned { RangeCheck::Off } else { self.range_set };
+        if warned && self.range_set != RangeCheck::Warn {
+            // Refused by `check_state`.
+            self.range_set = RangeCheck::Stop;
+            self.range = RangeCheck::Warn;
+        }
         match &mut self.bdf {
             Integrator::Two(b) => b.visit_state(v),
             Integrator::Dae(b) => b.visit_state(v),
@@ -682,6 +764,11 @@ impl Run {
         }
         if let PhiInput::Host(signal) = &self.input {
             signal.check()?;
+        }
+        let range_ok = self.range == self.range_set
+            || (self.range_set == RangeCheck::Warn && self.range == RangeCheck::Off);
+        if !range_ok {
+            return Err("field `range_warned`: set, but range_check is not warn".into());
         }
         match &self.bdf {
             Integrator::Two(b) => b.check_state(),

@@ -4,7 +4,7 @@
 #![forbid(unsafe_code)]
 
 use super::variables::{Type, Var, Variable, VARIABLES};
-use crate::model::{Formulation, Interpolation, Outputs, PaperLaw, Params};
+use crate::model::{Formulation, Interpolation, Outputs, PaperLaw, Params, RangeCheck};
 use crate::solver::{BdfConfig, FixedStep};
 use std::fmt;
 
@@ -28,6 +28,7 @@ pub(super) struct Values {
     pub fixed_order: i32,
     pub phi_extrapolation: i32,
     pub phi_interpolation: Interpolation,
+    pub range_check: RangeCheck,
     pub stability_guard: bool,
     pub phi: f64,
 }
@@ -65,6 +66,7 @@ impl Values {
             fixed_order: 2,
             phi_extrapolation: 3,
             phi_interpolation: Interpolation::Smooth,
+            range_check: RangeCheck::Stop,
             stability_guard: true,
             phi: 0.0,
         };
@@ -139,6 +141,7 @@ impl Values {
                     Var::PhiInterpolation => {
                         self.phi_interpolation = Interpolation::ALL[(k - 1) as usize]
                     }
+                    Var::RangeCheck => self.range_check = RangeCheck::ALL[(k - 1) as usize],
                     _ => unreachable!("checked by type"),
                 }
             }
@@ -180,6 +183,10 @@ impl Values {
             Var::PhiInterpolation => {
                 let k = Interpolation::ALL.iter().position(|i| *i == self.phi_interpolation);
                 Value::Integer(k.expect("every interpolation is listed") as i32 + 1)
+            }
+            Var::RangeCheck => {
+                let k = RangeCheck::ALL.iter().position(|r| *r == self.range_check);
+                Value::Integer(k.expect("every range check is listed") as i32 + 1)
             }
             Var::StabilityGuard => Value::Boolean(self.stability_guard),
             _ => return None,

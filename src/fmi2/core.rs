@@ -120,7 +120,7 @@ impl Core {
         let t0 = self.setup.start_time;
         let options = v.solver_settings(self.setup.rtol());
         let init = InitialState::default();
-        let run = match v.phi_source {
+        let mut run = match v.phi_source {
             PhiSource::Law => Run::with_law(model, v.formulation, &options, t0, init, v.law),
             PhiSource::Input => {
                 let signal = HostSignal::new(v.phi_interpolation, v.phi_extrapolation as usize);
@@ -128,6 +128,7 @@ impl Core {
             }
         }
         .map_err(|e| e.to_string())?;
+        run.set_range_check(v.range_check);
         let phi0 = run.piece().eval(t0).phi;
         run.model().check_start(phi0, 0.0, 0.0).map_err(|e| e.to_string())?;
         Ok(run)

@@ -709,6 +709,10 @@ impl Instance {
         }
         self.core.time = target;
         self.core.last_successful_time = target;
+        if let Some(warning) = run.take_warning() {
+            self.log(Status::Warning, &format!("{F}: {warning}"));
+            return Ok(Status::Warning);
+        }
         Ok(Status::Ok)
     }
 

@@ -20,7 +20,7 @@
 use super::binding::{PhiSource, Values};
 use super::core::{Core, State};
 use super::variables::{guid, Causality, VARIABLES};
-use crate::model::{Formulation, Interpolation};
+use crate::model::{Formulation, Interpolation, RangeCheck};
 use crate::solver::{check_rtol, StateVisitor};
 
 const MAGIC: &[u8; 8] = b"BBFMUST\0";
@@ -201,6 +201,11 @@ fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), St
         1 => PhiSource::Law,
         _ => return Err(format!("field `phi_source` = {src} is out of range")),
     };
+    let mut range = values.range_check as u64;
+    v.count("range_check", &mut range);
+    values.range_check = *RangeCheck::ALL
+        .get(range as usize)
+        .ok_or_else(|| format!("field `range_check` = {range} is out of range"))?;
     let mut interp = values.phi_interpolation as u64;
     v.count("phi_interpolation", &mut interp);
     values.phi_interpolation = *Interpolation::ALL

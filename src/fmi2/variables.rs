@@ -139,7 +139,19 @@ pub const PHI_INTERPOLATION_TYPE: EnumType = EnumType {
     ],
 };
 
-pub const ENUM_TYPES: &[EnumType] = &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE];
+pub const RANGE_CHECK_TYPE: EnumType = EnumType {
+    name: "RangeCheck",
+    description: "What a step does when the state leaves the range of validity of the equations \
+                  (|v1| <= l, |theta1| <= pi/2, the dae formulation's drift)",
+    items: &[
+        ("stop", "the step ends there with fmi2Discard and a message"),
+        ("warn", "fmi2Warning with a message, once; the run goes on"),
+        ("off", "the run goes on; a state that is not a number still ends the step"),
+    ],
+};
+
+pub const ENUM_TYPES: &[EnumType] =
+    &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE];
 
 /// `<LogCategories>`: (name, description). Errors are always logged; the others only when
 /// debug logging is on for them.
@@ -229,6 +241,7 @@ pub enum Var {
     FixedOrder,
     PhiExtrapolation,
     PhiInterpolation,
+    RangeCheck,
     StabilityGuard,
     Phi,
     V1,
@@ -431,6 +444,14 @@ pub const VARIABLES: &[Variable] = &[
         ty: Type::Enumeration { ty: &PHI_INTERPOLATION_TYPE, start: 1 },
         description: "Interpolation of the input phi between communication points: smooth or \
                       taylor",
+    },
+    Variable {
+        var: Var::RangeCheck,
+        name: "range_check",
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        ty: Type::Enumeration { ty: &RANGE_CHECK_TYPE, start: 1 },
+        description: "Outside the range of validity (|theta1| <= pi/2, ...): stop, warn or off",
     },
     Variable {
         var: Var::StabilityGuard,

@@ -58,3 +58,38 @@ impl FromStr for Formulation {
         }
     }
 }
+
+/// What a run does when the state leaves the region where the equations hold (|v1| ≤ l,
+/// |ϑ1| ≤ π/2, and the dae formulation's drift; [`check_deflection`](super::systems)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RangeCheck {
+    /// Stop the run there with a message (the default).
+    #[default]
+    Stop,
+    /// Say so once, then go on.
+    Warn,
+    /// Go on without a word. A state that is not a number still stops the run.
+    Off,
+}
+
+impl RangeCheck {
+    pub const ALL: [RangeCheck; 3] = [RangeCheck::Stop, RangeCheck::Warn, RangeCheck::Off];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RangeCheck::Stop => "stop",
+            RangeCheck::Warn => "warn",
+            RangeCheck::Off => "off",
+        }
+    }
+}
+
+impl FromStr for RangeCheck {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        RangeCheck::ALL
+            .into_iter()
+            .find(|r| r.name() == s)
+            .ok_or_else(|| format!("`range_check` = {s}: must be one of stop, warn, off"))
+    }
+}

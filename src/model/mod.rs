@@ -12,7 +12,7 @@ mod signal;
 mod systems;
 
 pub use dynamics::{BeamBody, Modes, Reactions};
-pub use formulation::Formulation;
+pub use formulation::{Formulation, RangeCheck};
 pub use kinematics::{pq, u1, u1_accel_bias};
 pub use params::{ParamError, Params};
 pub use phi::{PaperLaw, Phi, PhiPiece, Poly};

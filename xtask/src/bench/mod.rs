@@ -698,6 +698,7 @@ fn write_costs(path: &Path, scenes: &[&str]) -> Result {
                     model: &model,
                     phi: piece,
                     linear: s.formulation == Formulation::Linear,
+                    range_check: true,
                 };
                 costs(&sys, t, SVector::<f64, 4>::new(0.01, 0.004, 0.05, 0.02))
             }
@@ -706,6 +707,7 @@ fn write_costs(path: &Path, scenes: &[&str]) -> Result {
                     model: &model,
                     phi: piece,
                     stabilized: s.formulation == Formulation::DaeStabilized,
+                    range_check: true,
                 };
                 let y = SVector::<f64, 6>::from([0.01, 0.004, 0.0, 0.05, 0.02, 0.0]);
                 costs(&sys, t, sys.consistent(&y))
