@@ -7,8 +7,8 @@
 #![forbid(unsafe_code)]
 
 use crate::model::{
-    BeamBody, DaeSystem, Formulation, HostSignal, Interpolation, Outputs, PaperLaw, ParamError,
-    Params, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem, HISTORY,
+    BeamBody, DaeSystem, Formulation, HostSignal, Interpolation, Kinematics, Outputs, PaperLaw,
+    ParamError, Params, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem, HISTORY,
 };
 use crate::solver::{check_rtol, Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
 use nalgebra::SVector;
@@ -675,9 +675,15 @@ impl Run {
 
     /// The outputs at `t` inside the last step (dense output), with the current piece.
     pub fn outputs_at(&self, t: f64) -> Result<Outputs, SolverError> {
+        Ok(self.kinematics_at(t)?.outputs(&self.model))
+    }
+
+    /// The motion at `t` inside the last step (dense output): the outputs without the
+    /// reactions and the energy, which follow from it.
+    pub fn kinematics_at(&self, t: f64) -> Result<Kinematics, SolverError> {
         Ok(match &self.bdf {
-            Integrator::Two(b) => self.two_dof().outputs(t, &b.interpolate(t)?),
-            Integrator::Dae(b) => self.dae().outputs(t, &b.interpolate(t)?),
+            Integrator::Two(b) => self.two_dof().kinematics(t, &b.interpolate(t)?),
+            Integrator::Dae(b) => self.dae().kinematics(t, &b.interpolate(t)?),
         })
     }
 

@@ -4,7 +4,9 @@
 #![forbid(unsafe_code)]
 
 use super::variables::{Type, Var, Variable, VARIABLES};
-use crate::model::{Formulation, Interpolation, Outputs, PaperLaw, Params, RangeCheck};
+use crate::model::{
+    Formulation, Interpolation, Kinematics, PaperLaw, Params, RangeCheck, Reactions,
+};
 use crate::solver::{BdfConfig, FixedStep};
 use std::fmt;
 
@@ -208,25 +210,89 @@ impl Values {
     }
 }
 
-/// The value of output `var` in `o`; `None` for a variable that is not an output.
-pub(super) fn output(var: Var, o: &Outputs) -> Option<f64> {
+/// What an output is computed from: the motion (cheap, with every step's outputs), or the
+/// reactions or the energy (computed only when one of them is read).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Group {
+    Motion,
+    Reactions,
+    Energy,
+}
+
+/// The group of output `var`; `None` for a variable that is not an output.
+pub(super) fn group(var: Var) -> Option<Group> {
     Some(match var {
-        Var::V1 => o.v1,
-        Var::Theta1 => o.theta1,
-        Var::U2 => o.u2,
-        Var::Dv1 => o.dv1,
-        Var::Dtheta1 => o.dtheta1,
-        Var::Du2 => o.du2,
-        Var::N => o.reactions.n,
-        Var::P => o.reactions.p,
-        Var::Moment => o.reactions.m,
-        Var::Drift => o.drift,
-        Var::Energy => o.energy,
-        Var::PhiApplied => o.phi.phi,
-        Var::DphiApplied => o.phi.dphi,
-        Var::DdphiApplied => o.phi.ddphi,
+        Var::N | Var::P | Var::Moment => Group::Reactions,
+        Var::Energy => Group::Energy,
+        Var::V1
+        | Var::Theta1
+        | Var::U2
+        | Var::Dv1
+        | Var::Dtheta1
+        | Var::Du2
+        | Var::Drift
+        | Var::PhiApplied
+        | Var::DphiApplied
+        | Var::DdphiApplied => Group::Motion,
         _ => return None,
     })
+}
+
+/// The value of a motion output `var`; `None` for the other variables.
+pub(super) fn motion(var: Var, k: &Kinematics) -> Option<f64> {
+    Some(match var {
+        Var::V1 => k.v1,
+        Var::Theta1 => k.theta1,
+        Var::U2 => k.u2,
+        Var::Dv1 => k.dv1,
+        Var::Dtheta1 => k.dtheta1,
+        Var::Du2 => k.du2,
+        Var::Drift => k.drift,
+        Var::PhiApplied => k.phi.phi,
+        Var::DphiApplied => k.phi.dphi,
+        Var::DdphiApplied => k.phi.ddphi,
+        _ => return None,
+    })
+}
+
+/// The value of a reaction output `var`; `None` for the other variables.
+pub(super) fn reaction(var: Var, r: &Reactions) -> Option<f64> {
+    Some(match var {
+        Var::N => r.n,
+        Var::P => r.p,
+        Var::Moment => r.m,
+        _ => return None,
+    })
+}
+
+/// Highest order of the output derivatives (fmi2GetRealOutputDerivatives), the
+/// `maxOutputDerivativeOrder` of the model description.
+pub const MAX_OUTPUT_DERIVATIVE_ORDER: i32 = 2;
+
+/// The time derivative of order `order` (1 or 2) of output `var`, where the motion gives it
+/// exactly: the rates and accelerations of v1, theta1 and u2 (the accelerations from the
+/// equations of motion at the current state), and φ′, φ″ of the piece in use. `None` for the
+/// other outputs and orders.
+pub(super) fn derivative(var: Var, order: i32, k: &Kinematics) -> Option<f64> {
+    Some(match (var, order) {
+        (Var::V1, 1) => k.dv1,
+        (Var::V1, 2) | (Var::Dv1, 1) => k.ddv1,
+        (Var::Theta1, 1) => k.dtheta1,
+        (Var::Theta1, 2) | (Var::Dtheta1, 1) => k.ddtheta1,
+        (Var::U2, 1) => k.du2,
+        (Var::U2, 2) | (Var::Du2, 1) => k.ddu2,
+        (Var::PhiApplied, 1) => k.phi.dphi,
+        (Var::PhiApplied, 2) | (Var::DphiApplied, 1) => k.phi.ddphi,
+        _ => return None,
+    })
+}
+
+/// The outputs that have derivatives of order `order` ([`derivative`]), for error messages.
+pub(super) fn with_derivatives(order: i32) -> &'static str {
+    match order {
+        1 => "v1, theta1, u2, dv1, dtheta1, du2, phi_applied, dphi_applied",
+        _ => "v1, theta1, u2, phi_applied",
+    }
 }
 
 /// Most internal steps in one fmi2DoStep, so that a step always returns in bounded time

@@ -4,7 +4,7 @@
 #![forbid(unsafe_code)]
 
 use super::binding::{PhiSource, Values};
-use crate::model::{BeamBody, HostSignal, Outputs, Sample};
+use crate::model::{BeamBody, HostSignal, Kinematics, Reactions, Sample};
 use crate::sim::{InitialState, Run};
 
 /// The states of the FMI 2.0 co-simulation state machine (spec §4.2.4) that an instance can
@@ -73,6 +73,15 @@ impl Setup {
     }
 }
 
+/// The outputs at the communication time, by group ([`Group`](super::binding::Group)),
+/// each computed at its first request after a change. Not part of a serialized state.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct OutputCache {
+    pub kinematics: Option<Kinematics>,
+    pub reactions: Option<Reactions>,
+    pub energy: Option<f64>,
+}
+
 /// Everything an FMU state holds: the whole instance except its name and logger.
 #[derive(Clone, Debug)]
 pub struct Core {
@@ -88,8 +97,8 @@ pub struct Core {
     pub(super) last_successful_time: f64,
     /// fmi2Terminated: the FMU stopped the run.
     pub(super) terminated: bool,
-    /// Outputs at `time`, computed at the first request after a change.
-    pub(super) cache: Option<Outputs>,
+    /// Outputs at `time`, each group computed at its first request after a change.
+    pub(super) cache: OutputCache,
 }
 
 impl Core {
@@ -103,7 +112,7 @@ impl Core {
             time: 0.0,
             last_successful_time: 0.0,
             terminated: false,
-            cache: None,
+            cache: OutputCache::default(),
         }
     }
 

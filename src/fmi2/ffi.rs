@@ -756,12 +756,23 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *mut fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetRealOutputDerivatives", Instance::get_real_output_derivatives)
+    const F: &str = "fmi2GetRealOutputDerivatives";
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, F, |inst| {
+        match unsafe { (slice(vr, nvr), slice(order, nvr), slice_mut(value, nvr)) } {
+            (Some(vr), Some(order), Some(value)) => {
+                inst.get_real_output_derivatives(vr, order, value)
+            }
+            (None, _, _) => null_arg(inst, F, "vr", nvr),
+            (_, None, _) => null_arg(inst, F, "order", nvr),
+            (_, _, None) => null_arg(inst, F, "value", nvr),
+        }
+    })
 }
 
 /// # Safety

@@ -6,14 +6,14 @@
 //! [`Logger`] and returns the FMI status. No `unsafe`, no I/O.
 #![forbid(unsafe_code)]
 
-use super::binding::{self, Value};
+use super::binding::{self, Group, Value};
 pub use super::core::State;
-use super::core::{Core, Setup};
+use super::core::{Core, OutputCache, Setup};
 use super::state;
 use super::variables::{
     BaseType, Causality, Var, Variable, CAPABILITIES, LOG_CATEGORIES, VARIABLES,
 };
-use crate::model::Outputs;
+use crate::model::{BeamBody, Kinematics};
 use crate::solver::check_rtol;
 use std::fmt;
 
@@ -331,7 +331,7 @@ impl Instance {
         self.core.setup = setup;
         self.core.time = start_time;
         self.core.last_successful_time = start_time;
-        self.core.cache = None;
+        self.core.cache = OutputCache::default();
         self.trace(format_args!("{F}: {setup:?}"));
         Ok(Status::Ok)
     }
@@ -340,7 +340,7 @@ impl Instance {
     pub fn enter_initialization_mode(&mut self) -> Status {
         let r = self.allowed("fmi2EnterInitializationMode", mask::INSTANTIATED).map(|()| {
             self.core.state = State::InitializationMode;
-            self.core.cache = None;
+            self.core.cache = OutputCache::default();
             self.trace(format_args!("fmi2EnterInitializationMode: state `initialization mode`"));
             Status::Ok
         });
@@ -367,7 +367,7 @@ impl Instance {
         self.core.time = t0;
         self.core.last_successful_time = t0;
         self.core.terminated = false;
-        self.core.cache = None;
+        self.core.cache = OutputCache::default();
         self.core.state = State::StepComplete;
         self.trace(format_args!("{F}: integrator started at t = {t0:?}"));
         Ok(Status::Ok)
@@ -422,23 +422,59 @@ impl Instance {
         Ok(info)
     }
 
-    /// The outputs at the communication time, computed now if they are not cached.
-    fn outputs(&mut self, func: &str) -> FmiResult<Outputs> {
-        if let Some(o) = self.core.cache {
-            return Ok(o);
+    /// The motion at the communication time, computed now if it is not cached, and the
+    /// model it was computed with.
+    fn kinematics(&mut self, func: &str) -> FmiResult<Kinematics> {
+        if let Some(k) = self.core.cache.kinematics {
+            return Ok(k);
         }
         let computed = match &self.core.run {
-            Some(run) => run.outputs_at(run.t()).map_err(|e| e.to_string()),
+            Some(run) => run.kinematics_at(run.t()).map_err(|e| e.to_string()),
             // Initialization mode: the outputs of the start state.
             None => self.core.build_run().and_then(|run| {
-                run.outputs_at(self.core.setup.start_time).map_err(|e| e.to_string())
+                run.kinematics_at(self.core.setup.start_time).map_err(|e| e.to_string())
             }),
         };
-        let o = computed.map_err(|msg| {
+        let k = computed.map_err(|msg| {
             FmiError::error(format!("{func}: the outputs cannot be computed: {msg}"))
         })?;
-        self.core.cache = Some(o);
-        Ok(o)
+        self.core.cache.kinematics = Some(k);
+        Ok(k)
+    }
+
+    /// The model the outputs are computed with.
+    fn model(&self) -> Result<BeamBody, String> {
+        match &self.core.run {
+            Some(run) => Ok(*run.model()),
+            None => BeamBody::new(self.core.values.params).map_err(|e| e.to_string()),
+        }
+    }
+
+    /// The value of output `var` at the communication time, its group computed if needed.
+    fn output(&mut self, func: &str, var: Var) -> FmiResult<(f64, f64)> {
+        let k = self.kinematics(func)?;
+        let cannot =
+            |msg: String| FmiError::error(format!("{func}: the outputs cannot be computed: {msg}"));
+        let x = match binding::group(var).expect("only outputs come here") {
+            Group::Motion => binding::motion(var, &k).expect("a motion output"),
+            Group::Reactions => {
+                let r = match self.core.cache.reactions {
+                    Some(r) => r,
+                    None => k.reactions(&self.model().map_err(cannot)?),
+                };
+                self.core.cache.reactions = Some(r);
+                binding::reaction(var, &r).expect("a reaction output")
+            }
+            Group::Energy => {
+                let e = match self.core.cache.energy {
+                    Some(e) => e,
+                    None => k.energy(&self.model().map_err(cannot)?),
+                };
+                self.core.cache.energy = Some(e);
+                e
+            }
+        };
+        Ok((x, k.t))
     }
 
     /// The value of any variable of base type `base`.
@@ -447,12 +483,11 @@ impl Instance {
         if let Some(v) = self.core.values.get(info.var) {
             return Ok(v);
         }
-        let o = self.outputs(func)?;
-        let x = binding::output(info.var, &o).expect("parameters and the input are served above");
+        let (x, t) = self.output(func, info.var)?;
         if !x.is_finite() {
             return Err(FmiError::error(format!(
-                "{func}: output `{}` is not finite at t = {}",
-                info.name, o.t
+                "{func}: output `{}` is not finite at t = {t}",
+                info.name
             )));
         }
         Ok(Value::Real(x))
@@ -560,7 +595,7 @@ impl Instance {
                 next.set(info, *value).map_err(|msg| FmiError::error(format!("{func}: {msg}")))?;
             }
             self.core.values = next;
-            self.core.cache = None;
+            self.core.cache = OutputCache::default();
             self.trace(format_args!("{func}: {}", Listing(vrs, values)));
             Ok(Status::Ok)
         })();
@@ -638,18 +673,59 @@ impl Instance {
             pending[(*order - 1) as usize] = Some(*value);
         }
         self.core.pending = pending;
-        self.core.cache = None;
+        self.core.cache = OutputCache::default();
         self.trace(format_args!("{F}: vr {vrs:?}, order {orders:?}, value {values:?}"));
         Ok(Status::Ok)
     }
 
-    /// fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder = 0).
-    pub fn get_real_output_derivatives(&mut self) -> Status {
+    /// fmi2GetRealOutputDerivatives: time derivatives of order 1 and 2 of the outputs at
+    /// the communication time, where the motion gives them exactly
+    /// ([`binding::derivative`]): masters that extrapolate their inputs use these.
+    pub fn get_real_output_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        out: &mut [f64],
+    ) -> Status {
         const F: &str = "fmi2GetRealOutputDerivatives";
-        debug_assert_eq!(CAPABILITIES.max_output_derivative_order, 0);
-        let r = self.allowed(F, mask::OUTPUT_DERIVATIVES).and_then(|()| {
-            Err(FmiError::error(format!("{F}: not provided (maxOutputDerivativeOrder = 0)")))
-        });
+        let r = (|| {
+            self.allowed(F, mask::OUTPUT_DERIVATIVES)?;
+            let max = binding::MAX_OUTPUT_DERIVATIVE_ORDER;
+            debug_assert_eq!(CAPABILITIES.max_output_derivative_order, max as u32);
+            for ((vr, order), slot) in vrs.iter().zip(orders).zip(out.iter_mut()) {
+                let info = Self::lookup(F, *vr, BaseType::Real)?;
+                if info.causality != Causality::Output {
+                    return Err(FmiError::error(format!(
+                        "{F}: `{}` ({vr}) is not an output",
+                        info.name
+                    )));
+                }
+                if !(1..=max).contains(order) {
+                    return Err(FmiError::error(format!(
+                        "{F}: order {order} of `{}` is out of range: must be 1..={max} \
+                         (maxOutputDerivativeOrder)",
+                        info.name
+                    )));
+                }
+                let k = self.kinematics(F)?;
+                let x = binding::derivative(info.var, *order, &k).ok_or_else(|| {
+                    FmiError::error(format!(
+                        "{F}: `{}` has no derivative of order {order}: only {} have",
+                        info.name,
+                        binding::with_derivatives(*order)
+                    ))
+                })?;
+                if !x.is_finite() {
+                    return Err(FmiError::error(format!(
+                        "{F}: the derivative of order {order} of `{}` is not finite at t = {}",
+                        info.name, k.t
+                    )));
+                }
+                *slot = x;
+            }
+            self.trace(format_args!("{F}: vr {vrs:?}, order {orders:?}, value {out:?}"));
+            Ok(Status::Ok)
+        })();
         self.status(r)
     }
 
@@ -692,7 +768,7 @@ impl Instance {
         self.trace(format_args!("{F}: tc = {tc}, h = {h}"));
         let sample = self.core.sample(tc);
         self.core.pending = [None, None];
-        self.core.cache = None;
+        self.core.cache = OutputCache::default();
         let run = self.core.run.as_mut().expect("stepComplete has an integrator");
         run.set_sample(sample);
         let result = run.step_to(target);
@@ -931,5 +1007,77 @@ mod tests {
             bad[i] ^= 0x40;
             assert!(b.deserialize(&bad).is_err(), "byte {i}");
         }
+    }
+
+    /// The largest differences of the output derivatives of v1, theta1 and u2 from central
+    /// differences of the outputs over steps h, relative to the largest derivative, for
+    /// orders 1 and 2, over 0.4 s of the paper's scene.
+    fn finite_difference_errors(h: f64) -> [f64; 2] {
+        let (mut inst, msgs) = law_instance(1e-12);
+        let vars = [Var::V1.vr(), Var::Theta1.vr(), Var::U2.vr()];
+        let (mut values, mut d1, mut d2) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..(0.4 / h).round() as usize {
+            assert_eq!(inst.do_step(k as f64 * h, h), Status::Ok, "{:?}", msgs.borrow().last());
+            let mut y = [0.0; 3];
+            assert_eq!(inst.get_real(&vars, &mut y), Status::Ok);
+            let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+            assert_eq!(inst.get_real_output_derivatives(&vars, &[1, 1, 1], &mut a), Status::Ok);
+            assert_eq!(inst.get_real_output_derivatives(&vars, &[2, 2, 2], &mut b), Status::Ok);
+            values.push(y);
+            d1.push(a);
+            d2.push(b);
+        }
+        let mut worst = [0.0f64; 2];
+        for j in 0..3 {
+            let scale1 = d1.iter().map(|d| d[j].abs()).fold(0.0, f64::max);
+            let scale2 = d2.iter().map(|d| d[j].abs()).fold(0.0, f64::max);
+            for k in 1..values.len() - 1 {
+                let fd1 = (values[k + 1][j] - values[k - 1][j]) / (2.0 * h);
+                let fd2 = (values[k + 1][j] - 2.0 * values[k][j] + values[k - 1][j]) / (h * h);
+                worst[0] = worst[0].max((fd1 - d1[k][j]).abs() / scale1);
+                worst[1] = worst[1].max((fd2 - d2[k][j]).abs() / scale2);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn output_derivatives_match_finite_differences_of_the_outputs() {
+        // Central differences are off by O(h²): the differences shrink 4-fold per halving.
+        let (coarse, fine) = (finite_difference_errors(2e-3), finite_difference_errors(1e-3));
+        for order in 0..2 {
+            let ratio = coarse[order] / fine[order];
+            assert!(
+                fine[order] < 1e-2 && (3.0..5.0).contains(&ratio),
+                "order {}: {coarse:?} {fine:?}",
+                order + 1
+            );
+        }
+        // Outside what the motion gives: refused, with the allowed ones named.
+        let (mut inst, msgs) = law_instance(1e-6);
+        assert_eq!(inst.do_step(0.0, 0.01), Status::Ok);
+        let mut x = [0.0];
+        assert_eq!(inst.get_real_output_derivatives(&[Var::N.vr()], &[1], &mut x), Status::Error);
+        assert!(msgs.borrow().last().unwrap().1.contains("only v1, theta1"));
+        assert_eq!(inst.get_real_output_derivatives(&[Var::V1.vr()], &[3], &mut x), Status::Error);
+        assert_eq!(inst.get_real_output_derivatives(&[Var::Ei.vr()], &[1], &mut x), Status::Error);
+    }
+
+    #[test]
+    fn reactions_and_energy_are_computed_only_when_read() {
+        let (mut inst, _) = law_instance(1e-6);
+        assert_eq!(inst.do_step(0.0, 0.01), Status::Ok);
+        let mut x = [0.0];
+        assert_eq!(inst.get_real(&[Var::V1.vr()], &mut x), Status::Ok);
+        let c = inst.core.cache;
+        assert!(c.kinematics.is_some() && c.reactions.is_none() && c.energy.is_none());
+        assert_eq!(inst.get_real(&[Var::Moment.vr()], &mut x), Status::Ok);
+        assert!(inst.core.cache.reactions.is_some() && inst.core.cache.energy.is_none());
+        // The same values as the standalone outputs.
+        let run = inst.core.run.as_ref().unwrap();
+        let o = run.outputs_at(run.t()).unwrap();
+        assert_eq!(x[0], o.reactions.m);
+        assert_eq!(inst.get_real(&[Var::Energy.vr()], &mut x), Status::Ok);
+        assert_eq!(x[0], o.energy);
     }
 }

@@ -53,7 +53,7 @@ pub struct Capabilities {
 pub const CAPABILITIES: Capabilities = Capabilities {
     can_handle_variable_communication_step_size: true,
     can_interpolate_inputs: true,
-    max_output_derivative_order: 0,
+    max_output_derivative_order: 2,
     can_run_asynchronuously: false,
     can_be_instantiated_only_once_per_process: false,
     can_not_use_memory_management_functions: true,

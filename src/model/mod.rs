@@ -17,4 +17,4 @@ pub use kinematics::{pq, u1, u1_accel_bias};
 pub use params::{ParamError, Params};
 pub use phi::{PaperLaw, Phi, PhiPiece, Poly};
 pub use signal::{HostSignal, Interpolation, Sample, SignalError, HISTORY};
-pub use systems::{DaeSystem, Outputs, TwoDofSystem};
+pub use systems::{DaeSystem, Kinematics, Outputs, TwoDofSystem};
