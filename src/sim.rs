@@ -8,7 +8,7 @@
 
 use crate::model::{
     BeamBody, DaeSystem, Formulation, HostSignal, Interpolation, Kinematics, Outputs, PaperLaw,
-    ParamError, Params, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem, HISTORY,
+    ParamError, Params, Phi, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem, HISTORY,
 };
 use crate::solver::{check_rtol, Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
 use nalgebra::SVector;
@@ -520,7 +520,9 @@ impl Run {
         times: impl IntoIterator<Item = f64>,
         mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
     ) -> Result<(), SimError> {
-        let (t0, piece, input, sample) = (self.t(), self.piece, self.input, self.sample);
+        let (t0, piece, sample) = (self.t(), self.piece, self.sample);
+        // The host's signal as before, to restore if no step is taken (the law has no state).
+        let input = matches!(self.input, PhiInput::Host(_)).then_some(self.input);
         let result = self.begin(t).and_then(|()| {
             for tout in times {
                 self.advance_to(tout.min(t), t)?;
@@ -529,7 +531,10 @@ impl Run {
             Ok(self.advance_to(t, t)?)
         });
         if result.is_err() && self.t() <= t0 {
-            (self.piece, self.input, self.sample) = (piece, input, sample);
+            (self.piece, self.sample) = (piece, sample);
+            if let Some(input) = input {
+                self.input = input;
+            }
         }
         result
     }
@@ -548,7 +553,7 @@ impl Run {
                 t - now
             ))
         })?;
-        self.switch_piece(PhiPiece::Poly(poly))?;
+        self.switch_piece(PhiPiece::Poly(poly), current)?;
         Ok(())
     }
 
@@ -558,25 +563,19 @@ impl Run {
     /// history makes the error test fail repeatedly at tight tolerances (the paper's scene
     /// with values every 8.5 ms failed at rtol 1e-10). A smaller change, as a C¹ join of a
     /// smooth input makes it at short communication steps, keeps the history.
-    fn switch_piece(&mut self, piece: PhiPiece) -> Result<(), SolverError> {
-        let t = self.t();
-        let (old, new) = (self.piece.eval(t), piece.eval(t));
+    /// `old` is φ of the piece in use at the current time.
+    fn switch_piece(&mut self, piece: PhiPiece, old: Phi) -> Result<(), SolverError> {
+        let new = piece.eval(self.t());
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
         let restart = if !(same(old.phi, new.phi) && same(old.dphi, new.dphi)) {
             true
         } else if same(old.ddphi, new.ddphi) {
             false
         } else {
-            let (model, formulation, before) = (&self.model, self.formulation, self.piece);
+            let (model, formulation) = (&self.model, self.formulation);
             let change = match &mut self.bdf {
-                Integrator::Two(b) => b.change_of_rhs(
-                    &two_dof(model, before, formulation),
-                    &two_dof(model, piece, formulation),
-                ),
-                Integrator::Dae(b) => b.change_of_rhs(
-                    &dae(model, before, formulation),
-                    &dae(model, piece, formulation),
-                ),
+                Integrator::Two(b) => b.change_of_rhs(&two_dof(model, piece, formulation)),
+                Integrator::Dae(b) => b.change_of_rhs(&dae(model, piece, formulation)),
             };
             change > 1.0
         };

@@ -211,7 +211,9 @@ impl Instance {
         self.edge(result).unwrap_or_else(|status| status)
     }
 
-    /// Logs a call when `logCalls` is on; the message is built only then.
+    /// Logs a call when `logCalls` is on; the message is built only then (inlined, so that
+    /// with logging off not even its arguments are assembled).
+    #[inline(always)]
     fn trace(&mut self, msg: fmt::Arguments<'_>) {
         if self.logging.0[4] {
             (self.log)(Status::Ok, "logCalls", &msg.to_string());
@@ -563,7 +565,14 @@ impl Instance {
 
     /// Sets all values or none: each is checked first, against its variable's causality,
     /// the current state and its range.
-    fn set_all(&mut self, func: &str, base: BaseType, vrs: &[u32], values: &[Value]) -> Status {
+    fn set_all<T: Copy + fmt::Debug>(
+        &mut self,
+        func: &str,
+        base: BaseType,
+        vrs: &[u32],
+        values: &[T],
+        convert: impl Fn(T) -> Value,
+    ) -> Status {
         let r = (|| {
             self.allowed(func, mask::SET)?;
             if vrs.len() != values.len() {
@@ -573,7 +582,9 @@ impl Instance {
                     values.len()
                 )));
             }
-            let mut next = self.core.values;
+            // All or none: a copy takes the values, unless there is only one.
+            let single = vrs.len() == 1;
+            let mut copy = if single { None } else { Some(self.core.values) };
             let state = self.core.state;
             for (vr, value) in vrs.iter().zip(values) {
                 let info = Self::lookup(func, *vr, base)?;
@@ -592,9 +603,13 @@ impl Instance {
                         info.name
                     )));
                 }
-                next.set(info, *value).map_err(|msg| FmiError::error(format!("{func}: {msg}")))?;
+                let next = copy.as_mut().unwrap_or(&mut self.core.values);
+                next.set(info, convert(*value))
+                    .map_err(|msg| FmiError::error(format!("{func}: {msg}")))?;
             }
-            self.core.values = next;
+            if let Some(next) = copy {
+                self.core.values = next;
+            }
             self.core.cache = OutputCache::default();
             self.trace(format_args!("{func}: {}", Listing(vrs, values)));
             Ok(Status::Ok)
@@ -604,20 +619,17 @@ impl Instance {
 
     /// fmi2SetReal.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
-        let values: Vec<Value> = values.iter().map(|x| Value::Real(*x)).collect();
-        self.set_all("fmi2SetReal", BaseType::Real, vrs, &values)
+        self.set_all("fmi2SetReal", BaseType::Real, vrs, values, Value::Real)
     }
 
     /// fmi2SetInteger (integers and enumerations).
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
-        let values: Vec<Value> = values.iter().map(|k| Value::Integer(*k)).collect();
-        self.set_all("fmi2SetInteger", BaseType::Integer, vrs, &values)
+        self.set_all("fmi2SetInteger", BaseType::Integer, vrs, values, Value::Integer)
     }
 
     /// fmi2SetBoolean.
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
-        let values: Vec<Value> = values.iter().map(|b| Value::Boolean(*b)).collect();
-        self.set_all("fmi2SetBoolean", BaseType::Boolean, vrs, &values)
+        self.set_all("fmi2SetBoolean", BaseType::Boolean, vrs, values, Value::Boolean)
     }
 
     /// fmi2SetString: this model has no string variables.

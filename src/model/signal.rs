@@ -207,19 +207,16 @@ impl HostSignal {
 
     /// The piece for the step [s.t, s.t + h], given the host's sample `s` at its start and
     /// φ, φ′, φ″ there of the piece in use (`current`).
+    /// On failure the signal may have recorded the sample: the caller restores its copy if
+    /// it needs the signal as before ([`Run`](crate::sim::Run) does).
     pub fn plan(&mut self, s: Sample, current: Phi, h: f64) -> Result<Poly, SignalError> {
         if !(h.is_finite() && h > 0.0) {
             return Err(SignalError::NotFinite);
         }
-        let before = *self;
-        let result = match self.interpolation {
+        match self.interpolation {
             Interpolation::Smooth => self.plan_smooth(s, current, h),
             Interpolation::Taylor => self.plan_taylor(s, current, h),
-        };
-        if result.is_err() {
-            *self = before;
         }
-        result
     }
 
     fn plan_taylor(&mut self, s: Sample, current: Phi, h: f64) -> Result<Poly, SignalError> {
@@ -301,12 +298,9 @@ impl HostSignal {
         }
         // Round-off of a derivative of order r computed from values of size u over spacing
         // h is about eps·u/h^r.
-        let (mut u, mut du, mut ddu) = (s.phi.abs(), 0.0f64, 0.0f64);
-        for x in self.samples().iter().chain([s]) {
-            u = u.max(x.phi.abs());
-            du = du.max(x.dphi.unwrap_or(0.0).abs());
-            ddu = ddu.max(x.ddphi.unwrap_or(0.0).abs());
-        }
+        let u = s.phi.abs().max(current.phi.abs());
+        let du = s.dphi.unwrap_or(0.0).abs().max(current.dphi.abs());
+        let ddu = s.ddphi.unwrap_or(0.0).abs().max(current.ddphi.abs());
         let scale = [u + du * h + ddu * h * h, u / h + du + ddu * h, u / (h * h) + du / h + ddu];
         let predicted = [current.phi, current.dphi, current.ddphi];
         (0..s.orders()).any(|r| {
@@ -342,8 +336,9 @@ impl HostSignal {
                     let (p, dp, ddp) = newton(&z[..m], &c[..m], 1.0);
                     [p, dp, ddp]
                 };
-                // The last term; infinite with a single condition.
-                let q = if n > 1 { eval(n - 1) } else { [f64::INFINITY; 3] };
+                // The last term; infinite with a single condition. Values only need none:
+                // their joins are C¹, and no jump is looked for.
+                let q = if n > 1 && derivatives { eval(n - 1) } else { [f64::INFINITY; 3] };
                 (eval(n), q)
             }
         };
@@ -739,13 +734,12 @@ mod tests {
     }
 
     #[test]
-    fn a_failed_plan_changes_nothing() {
+    fn plans_that_cannot_be_finite_fail() {
         let mut sig = smooth(3);
         sig.start(Sample::value(0.0, 0.0));
         sig.plan(Sample::value(0.0, 0.0), Phi::default(), 1.0).unwrap();
-        let before = sig;
-        assert!(sig.plan(Sample::value(1.0, 1e300), Phi::default(), 1e-200).is_err());
-        assert_eq!(sig, before);
+        assert!(sig.clone().plan(Sample::value(1.0, 1e300), Phi::default(), 1e-200).is_err());
         assert!(sig.plan(Sample::value(1.0, 0.0), Phi::default(), 0.0).is_err());
+        assert!(sig.plan(Sample::value(1.0, 0.0), Phi::default(), f64::NAN).is_err());
     }
 }

@@ -354,21 +354,17 @@ impl<const N: usize> Bdf<N> {
     }
 
     /// How much a change of the right-hand side at the current point would matter to the
-    /// next step: ‖h·(f_after − f_before)‖ in the error test's weighted RMS norm, with h the
-    /// step planned next. Above about 1 the change alone would fail the error test, and the
-    /// history would carry it into the steps after; below, the step absorbs it. Two
-    /// evaluations of f. Infinite before the first step (there is no history to keep).
-    pub fn change_of_rhs<A: OdeSystem<N>, B: OdeSystem<N>>(
-        &mut self,
-        before: &A,
-        after: &B,
-    ) -> f64 {
-        if !self.started {
+    /// next step: ‖h·(f_after − f)‖ in the error test's weighted RMS norm, with h the step
+    /// planned next and f the derivative the history holds there (z₁/h, f of the last step's
+    /// converged corrector). Above about 1 the change alone would fail the error test, and
+    /// the history would carry it into the steps after; below, the step absorbs it. One
+    /// evaluation of f. Infinite before the first step (there is no history to keep).
+    pub fn change_of_rhs<B: OdeSystem<N>>(&mut self, after: &B) -> f64 {
+        if !self.started || self.hscale == 0.0 {
             return f64::INFINITY;
         }
         let (t, y) = (self.t, self.zn[0]);
-        let df = self.eval_rhs(after, t, &y) - self.eval_rhs(before, t, &y);
-        self.update_weights();
+        let df = self.eval_rhs(after, t, &y) - self.zn[1] / self.hscale;
         let norm = self.wrms(&(df * self.h_next.abs()));
         if norm.is_nan() {
             f64::INFINITY
