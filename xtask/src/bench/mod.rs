@@ -351,7 +351,13 @@ pub fn run(mode: Mode) -> Result {
     let phase = Instant::now();
     if let Some(report) = script("bench_report.py") {
         let _tick = crate::progress::ticker("bench: report", String::new);
-        run_cmd(Command::new(&python).arg(relative(&report)).current_dir(&root))?;
+        let mut cmd = Command::new(&python);
+        cmd.arg(relative(&report)).current_dir(&root);
+        // Only the full run replaces the snapshot in docs/; --quick reports in target/bench.
+        if mode == Mode::Quick {
+            cmd.args(["--no-docs", "--command", "cargo xtask bench --quick"]);
+        }
+        run_cmd(&mut cmd)?;
     }
     let report_time = phase.elapsed();
 
@@ -361,10 +367,14 @@ pub fn run(mode: Mode) -> Result {
         let mark = if path.exists() { "" } else { "  (missing)" };
         println!("  {}{mark}", relative(&path));
     }
-    for name in ["work_precision.png", "work_precision.md"] {
-        let path = root.join("docs").join(name);
-        let mark = if path.exists() { "" } else { "  (missing)" };
-        println!("  {}{mark}", relative(&path));
+    if mode == Mode::Full {
+        for name in ["work_precision.png", "work_precision.md"] {
+            let path = root.join("docs").join(name);
+            let mark = if path.exists() { "" } else { "  (missing)" };
+            println!("  {}{mark}", relative(&path));
+        }
+    } else {
+        println!("  (docs/ keeps the snapshot of the last full run)");
     }
     println!(
         "  raw data: {}, {}, sol/, ref/",
