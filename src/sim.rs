@@ -513,16 +513,14 @@ impl Run {
     /// the next piece, so f is never evaluated across the jump of φ''.
     ///
     /// On failure the run is at its last accepted step, with the piece it got there with,
-    /// so its outputs there are valid; if no step was accepted, it is as before the call.
+    /// so its outputs there are valid (a host's signal keeps the sample it was given).
     pub fn step_to_sampling(
         &mut self,
         t: f64,
         times: impl IntoIterator<Item = f64>,
         mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
     ) -> Result<(), SimError> {
-        let (t0, piece, sample) = (self.t(), self.piece, self.sample);
-        // The host's signal as before, to restore if no step is taken (the law has no state).
-        let input = matches!(self.input, PhiInput::Host(_)).then_some(self.input);
+        let (t0, piece) = (self.t(), self.piece);
         let result = self.begin(t).and_then(|()| {
             for tout in times {
                 self.advance_to(tout.min(t), t)?;
@@ -531,10 +529,7 @@ impl Run {
             Ok(self.advance_to(t, t)?)
         });
         if result.is_err() && self.t() <= t0 {
-            (self.piece, self.sample) = (piece, sample);
-            if let Some(input) = input {
-                self.input = input;
-            }
+            self.piece = piece;
         }
         result
     }

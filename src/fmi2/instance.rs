@@ -17,6 +17,15 @@ use crate::model::{BeamBody, Kinematics};
 use crate::solver::check_rtol;
 use std::fmt;
 
+/// Logs a call when `logCalls` is on: the message, and even its arguments, only then.
+macro_rules! trace {
+    ($inst:expr, $($arg:tt)*) => {
+        if $inst.logging.0[4] {
+            $inst.trace(format_args!($($arg)*))
+        }
+    };
+}
+
 /// fmi2Status.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 #[repr(i32)]
@@ -211,9 +220,7 @@ impl Instance {
         self.edge(result).unwrap_or_else(|status| status)
     }
 
-    /// Logs a call when `logCalls` is on; the message is built only then (inlined, so that
-    /// with logging off not even its arguments are assembled).
-    #[inline(always)]
+    /// Logs a call (see [`trace!`]).
     fn trace(&mut self, msg: fmt::Arguments<'_>) {
         if self.logging.0[4] {
             (self.log)(Status::Ok, "logCalls", &msg.to_string());
@@ -223,7 +230,7 @@ impl Instance {
     /// Traces an FMU-state call with the instance's state and time afterwards.
     fn trace_state(&mut self, what: &str) {
         let (state, t) = (self.core.state, self.core.time);
-        self.trace(format_args!("{what}: state `{}`, t = {t:?}", state.name()));
+        trace!(self, "{what}: state `{}`, t = {t:?}", state.name());
     }
 
     /// fmi2FreeInstance: traces the call; the caller then drops the instance. Allowed in
@@ -284,7 +291,7 @@ impl Instance {
             }
         }
         self.logging = flags;
-        self.trace(format_args!("{F}: loggingOn = {on}, categories {categories:?}"));
+        trace!(self, "{F}: loggingOn = {on}, categories {categories:?}");
         Ok(Status::Ok)
     }
 
@@ -334,7 +341,7 @@ impl Instance {
         self.core.time = start_time;
         self.core.last_successful_time = start_time;
         self.core.cache = OutputCache::default();
-        self.trace(format_args!("{F}: {setup:?}"));
+        trace!(self, "{F}: {setup:?}");
         Ok(Status::Ok)
     }
 
@@ -343,7 +350,7 @@ impl Instance {
         let r = self.allowed("fmi2EnterInitializationMode", mask::INSTANTIATED).map(|()| {
             self.core.state = State::InitializationMode;
             self.core.cache = OutputCache::default();
-            self.trace(format_args!("fmi2EnterInitializationMode: state `initialization mode`"));
+            trace!(self, "fmi2EnterInitializationMode: state `initialization mode`");
             Status::Ok
         });
         self.status(r)
@@ -371,7 +378,7 @@ impl Instance {
         self.core.terminated = false;
         self.core.cache = OutputCache::default();
         self.core.state = State::StepComplete;
-        self.trace(format_args!("{F}: integrator started at t = {t0:?}"));
+        trace!(self, "{F}: integrator started at t = {t0:?}");
         Ok(Status::Ok)
     }
 
@@ -380,7 +387,7 @@ impl Instance {
         let r = self.allowed("fmi2Terminate", mask::TERMINATE).map(|()| {
             self.core.state = State::Terminated;
             let t = self.core.time;
-            self.trace(format_args!("fmi2Terminate: at t = {t:?}"));
+            trace!(self, "fmi2Terminate: at t = {t:?}");
             Status::Ok
         });
         self.status(r)
@@ -390,7 +397,7 @@ impl Instance {
     pub fn reset(&mut self) -> Status {
         let r = self.allowed("fmi2Reset", mask::ANY_BUT_FATAL).map(|()| {
             self.core = Core::new();
-            self.trace(format_args!("fmi2Reset: back to `instantiated` with the start values"));
+            trace!(self, "fmi2Reset: back to `instantiated` with the start values");
             Status::Ok
         });
         self.status(r)
@@ -515,7 +522,7 @@ impl Instance {
             for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
                 *slot = convert(self.get_value(func, *vr, base)?);
             }
-            self.trace(format_args!("{func}: {}", Listing(vrs, &*out)));
+            trace!(self, "{func}: {}", Listing(vrs, &*out));
             Ok(Status::Ok)
         })();
         self.status(r)
@@ -550,7 +557,7 @@ impl Instance {
     fn no_strings(&mut self, func: &str, allowed: u32, vrs: &[u32]) -> Status {
         let r = self.allowed(func, allowed).and_then(|()| match vrs.first() {
             None => {
-                self.trace(format_args!("{func}: no variables"));
+                trace!(self, "{func}: no variables");
                 Ok(Status::Ok)
             }
             Some(vr) => Self::lookup(func, *vr, BaseType::String).map(|_| Status::Error),
@@ -611,7 +618,7 @@ impl Instance {
                 self.core.values = next;
             }
             self.core.cache = OutputCache::default();
-            self.trace(format_args!("{func}: {}", Listing(vrs, values)));
+            trace!(self, "{func}: {}", Listing(vrs, values));
             Ok(Status::Ok)
         })();
         self.status(r)
@@ -686,7 +693,7 @@ impl Instance {
         }
         self.core.pending = pending;
         self.core.cache = OutputCache::default();
-        self.trace(format_args!("{F}: vr {vrs:?}, order {orders:?}, value {values:?}"));
+        trace!(self, "{F}: vr {vrs:?}, order {orders:?}, value {values:?}");
         Ok(Status::Ok)
     }
 
@@ -735,7 +742,7 @@ impl Instance {
                 }
                 *slot = x;
             }
-            self.trace(format_args!("{F}: vr {vrs:?}, order {orders:?}, value {out:?}"));
+            trace!(self, "{F}: vr {vrs:?}, order {orders:?}, value {out:?}");
             Ok(Status::Ok)
         })();
         self.status(r)
@@ -777,7 +784,7 @@ impl Instance {
                 )));
             }
         }
-        self.trace(format_args!("{F}: tc = {tc}, h = {h}"));
+        trace!(self, "{F}: tc = {tc}, h = {h}");
         let sample = self.core.sample(tc);
         self.core.pending = [None, None];
         self.core.cache = OutputCache::default();
@@ -832,7 +839,7 @@ impl Instance {
                 )));
             }
             let t = self.core.last_successful_time;
-            self.trace(format_args!("{F}: fmi2LastSuccessfulTime = {t:?}"));
+            trace!(self, "{F}: fmi2LastSuccessfulTime = {t:?}");
             Ok(t)
         });
         self.edge(r)
@@ -849,7 +856,7 @@ impl Instance {
                 )));
             }
             let terminated = self.core.terminated;
-            self.trace(format_args!("{F}: fmi2Terminated = {terminated}"));
+            trace!(self, "{F}: fmi2Terminated = {terminated}");
             Ok(terminated)
         });
         self.edge(r)
@@ -902,7 +909,7 @@ impl Instance {
     pub fn check_free_state(&mut self, is_null: bool) -> Status {
         let r = self.allowed("fmi2FreeFMUstate", mask::ANY_BUT_FATAL).map(|()| {
             let what = if is_null { "NULL, nothing to free" } else { "a snapshot" };
-            self.trace(format_args!("fmi2FreeFMUstate: {what}"));
+            trace!(self, "fmi2FreeFMUstate: {what}");
             Status::Ok
         });
         self.status(r)
@@ -912,7 +919,7 @@ impl Instance {
     pub fn serialize(&mut self, snapshot: &Core) -> Result<Vec<u8>, Status> {
         let r = self.allowed("fmi2SerializeFMUstate", mask::GET | mask::INSTANTIATED).map(|()| {
             let bytes = state::serialize(snapshot);
-            self.trace(format_args!("fmi2SerializeFMUstate: {} bytes", bytes.len()));
+            trace!(self, "fmi2SerializeFMUstate: {} bytes", bytes.len());
             bytes
         });
         self.edge(r)
@@ -923,7 +930,7 @@ impl Instance {
         const F: &str = "fmi2SerializedFMUstateSize";
         let r = self.allowed(F, mask::GET | mask::INSTANTIATED).map(|()| {
             let n = state::serialize(snapshot).len();
-            self.trace(format_args!("{F}: {n} bytes"));
+            trace!(self, "{F}: {n} bytes");
             n
         });
         self.edge(r)
@@ -938,7 +945,7 @@ impl Instance {
                 .map(Box::new)
                 .map_err(|e| FmiError::error(format!("{F}: {e}")))?;
             let n = bytes.len();
-            self.trace(format_args!("{F}: {n} bytes, a snapshot in state `{}`", core.state.name()));
+            trace!(self, "{F}: {n} bytes, a snapshot in state `{}`", core.state.name());
             Ok(core)
         });
         self.edge(r)

@@ -207,8 +207,7 @@ impl HostSignal {
 
     /// The piece for the step [s.t, s.t + h], given the host's sample `s` at its start and
     /// φ, φ′, φ″ there of the piece in use (`current`).
-    /// On failure the signal may have recorded the sample: the caller restores its copy if
-    /// it needs the signal as before ([`Run`](crate::sim::Run) does).
+    /// On failure the signal may have recorded the sample.
     pub fn plan(&mut self, s: Sample, current: Phi, h: f64) -> Result<Poly, SignalError> {
         if !(h.is_finite() && h > 0.0) {
             return Err(SignalError::NotFinite);
