@@ -24,6 +24,7 @@
 mod cvode;
 #[cfg(feature = "bench")]
 mod diffsol;
+mod dostep;
 pub mod fmu;
 mod ours;
 pub mod problem;
@@ -361,6 +362,16 @@ pub fn run(mode: Mode) -> Result {
     }
     let report_time = phase.elapsed();
 
+    // The cost of one fmi2DoStep, from a bare C host (after the rounds: nothing else runs).
+    let phase = Instant::now();
+    let table = dostep::run(mode, &fmu_dir, &dir)?;
+    println!("\n{table}");
+    if mode == Mode::Full {
+        let docs = root.join("docs").join("dostep.md");
+        write_text(&docs, &table)?;
+    }
+    let dostep_time = phase.elapsed();
+
     println!("\nOutputs:");
     for name in ["work_precision.csv", "work_precision.png", "work_precision.md"] {
         let path = dir.join(name);
@@ -383,14 +394,15 @@ pub fn run(mode: Mode) -> Result {
     );
     let secs = Duration::as_secs_f64;
     println!(
-        "\nTime: setup {:.1} s, reference {:.1} s, rounds {:.1} s ({} + warm-up), report {:.1} s; \
-         benchmark (reference excluded) {:.1} s, total {:.1} s",
+        "\nTime: setup {:.1} s, reference {:.1} s, rounds {:.1} s ({} + warm-up), report {:.1} s, \
+         DoStep costs {:.1} s; benchmark (reference excluded) {:.1} s, total {:.1} s",
         secs(&setup),
         secs(&reference_time),
         secs(&rounds_time),
         rounds,
         secs(&report_time),
-        secs(&(rounds_time + report_time)),
+        secs(&dostep_time),
+        secs(&(rounds_time + report_time + dostep_time)),
         secs(&started.elapsed()),
     );
     Ok(())
