@@ -326,7 +326,7 @@ impl HostSignal {
     /// φ, φ′, φ″ at tc + h of the polynomial through the newest samples, and an estimate of
     /// their errors: the change of each when the oldest condition is dropped.
     fn extrapolate(&self, h: f64, derivatives: bool) -> Option<(Phi, [f64; 3])> {
-        let (p, q) = match self.quintic(h, derivatives) {
+        let (p, q) = match self.quintic(h, derivatives).or_else(|| self.even(h, derivatives)) {
             Some(pq) => pq,
             None => {
                 let most = if derivatives { MAX_CONDITIONS } else { self.degree + 1 };
@@ -353,6 +353,32 @@ impl HostSignal {
         });
         let finite = [target.phi, target.dphi, target.ddphi].iter().all(|x| x.is_finite());
         finite.then_some((target, error))
+    }
+
+    /// Values only, at a constant communication step (the samples at tc − kh to within
+    /// round-off): the extrapolation to tc + h as fixed weights of the values (the Lagrange
+    /// polynomials of the nodes 0, −1, …, −d at 1 and their derivatives; sympy). No error
+    /// estimate: values need none.
+    fn even(&self, h: f64, derivatives: bool) -> Option<([f64; 3], [f64; 3])> {
+        const W: [[[f64; 4]; 3]; 4] = [
+            [[1.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4]],
+            [[2.0, -1.0, 0.0, 0.0], [1.0, -1.0, 0.0, 0.0], [0.0; 4]],
+            [[3.0, -3.0, 1.0, 0.0], [2.5, -4.0, 1.5, 0.0], [1.0, -2.0, 1.0, 0.0]],
+            [[4.0, -6.0, 4.0, -1.0], [13.0 / 3.0, -9.5, 7.0, -11.0 / 6.0], [3.0, -8.0, 7.0, -2.0]],
+        ];
+        if derivatives {
+            return None;
+        }
+        let n = (self.degree + 1).min(self.len);
+        let tc = self.history[0].t;
+        let tolerance = 16.0 * f64::EPSILON * (1.0 + tc.abs() / h);
+        let even = (1..n).all(|k| ((self.history[k].t - tc) / h + k as f64).abs() <= tolerance);
+        if !even {
+            return None;
+        }
+        let w = &W[n - 1];
+        let at = |k: usize| (0..n).map(|i| w[k][i] * self.history[i].phi).sum::<f64>();
+        Some(([at(0), at(1), at(2)], [f64::INFINITY; 3]))
     }
 
     /// The common case of [`extrapolate`](Self::extrapolate) in closed form: φ, φ′ and φ″ at
@@ -593,6 +619,30 @@ mod tests {
         {
             assert!((x - y).abs() < 1e-12 * (1.0 + y.abs()), "{x} vs {y}");
         }
+    }
+
+    #[test]
+    fn even_weights_agree_with_divided_differences() {
+        for degree in 0..=3 {
+            let mut sig = smooth(degree);
+            for k in 0..4 {
+                let t = 0.3 + k as f64 * 0.05;
+                sig.push(Sample::value(t, sine(t).phi));
+            }
+            let (p, _) = sig.even(0.05, false).unwrap();
+            let n = degree + 1;
+            let (z, c, m) = sig.divided_differences(0.05, false, n);
+            assert_eq!(m, n);
+            let q = newton(&z[..n], &c[..n], 1.0);
+            for (a, b) in [(p[0], q.0), (p[1], q.1), (p[2], q.2)] {
+                assert!((a - b).abs() < 1e-12, "degree {degree}: {a} vs {b}");
+            }
+        }
+        let mut uneven = smooth(3);
+        for t in [0.0, 0.1, 0.25] {
+            uneven.push(Sample::value(t, 1.0));
+        }
+        assert!(uneven.even(0.1, false).is_none());
     }
 
     #[test]
