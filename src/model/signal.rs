@@ -241,9 +241,13 @@ impl HostSignal {
         self.start_slope = None;
         self.start_estimate = None;
         let mut start = current;
-        if self.is_jump(&s, &current, h) {
+        // A sample at the time of the newest one replaces it (the first step after the start
+        // sample, a host that went back): the host's data there describe the signal better
+        // than the piece in use, which was built without them.
+        let again = self.len > 0 && self.history[0].t == s.t;
+        if again || self.is_jump(&s, &current, h) {
             // The signal itself jumped: only what the host gives from tc on describes it.
-            self.len = 0;
+            self.len = if again { self.len } else { 0 };
             self.last_error = [f64::INFINITY; 3];
             start = s.taylor();
         }
