@@ -87,9 +87,19 @@ impl RangeCheck {
 impl FromStr for RangeCheck {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        RangeCheck::ALL
-            .into_iter()
-            .find(|r| r.name() == s)
-            .ok_or_else(|| format!("`range_check` = {s}: must be one of stop, warn, off"))
+        by_name(&RangeCheck::ALL, RangeCheck::name, "range_check", s)
     }
+}
+
+/// The item of `all` whose `name` is `text`; the error names the setting `key` and every item.
+pub(crate) fn by_name<T: Copy>(
+    all: &[T],
+    name: fn(T) -> &'static str,
+    key: &str,
+    text: &str,
+) -> Result<T, String> {
+    all.iter().copied().find(|item| name(*item) == text).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|item| name(*item)).collect();
+        format!("`{key}` = {text}: must be one of {}", names.join(", "))
+    })
 }

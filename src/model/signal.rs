@@ -56,10 +56,12 @@ impl Interpolation {
 impl std::str::FromStr for Interpolation {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Interpolation::ALL
-            .into_iter()
-            .find(|i| i.name() == s)
-            .ok_or_else(|| format!("`phi_interpolation` = {s}: must be one of smooth, taylor"))
+        super::formulation::by_name(
+            &Interpolation::ALL,
+            Interpolation::name,
+            "phi_interpolation",
+            s,
+        )
     }
 }
 
