@@ -560,7 +560,10 @@ impl Run {
     /// smooth input makes it at short communication steps, keeps the history.
     /// `old` is φ of the piece in use at the current time.
     fn switch_piece(&mut self, piece: PhiPiece, old: Phi) -> Result<(), SolverError> {
-        let new = piece.eval(self.t());
+        let new = match piece {
+            PhiPiece::Poly(p) if p.t0 == self.t() => p.at_start(),
+            _ => piece.eval(self.t()),
+        };
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
         let restart = if !(same(old.phi, new.phi) && same(old.dphi, new.dphi)) {
             true

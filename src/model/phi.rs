@@ -99,7 +99,9 @@ impl Poly {
     }
 
     pub fn eval(&self, t: f64) -> Phi {
-        let s = (t - self.t0) / self.h;
+        // One division: the right-hand side evaluates this at every Newton iteration.
+        let inv = 1.0 / self.h;
+        let s = (t - self.t0) * inv;
         let c = &self.c;
         let (mut p, mut dp, mut ddp) = (c[5], 0.0, 0.0);
         for k in (0..5).rev() {
@@ -107,7 +109,14 @@ impl Poly {
             dp = dp * s + p;
             p = p * s + c[k];
         }
-        Phi { phi: p, dphi: dp / self.h, ddphi: ddp / (self.h * self.h) }
+        Phi { phi: p, dphi: dp * inv, ddphi: ddp * (inv * inv) }
+    }
+
+    /// φ, φ′, φ″ at t0 (what [`eval`](Self::eval) gives there, without the Horner steps).
+    pub fn at_start(&self) -> Phi {
+        let inv = 1.0 / self.h;
+        let c = &self.c;
+        Phi { phi: c[0], dphi: c[1] * inv, ddphi: 2.0 * c[2] * (inv * inv) }
     }
 
     /// Whether φ, φ′ and φ″ are finite over the piece's step: finite coefficients, and

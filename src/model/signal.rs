@@ -306,7 +306,8 @@ impl HostSignal {
         let u = s.phi.abs().max(current.phi.abs());
         let du = s.dphi.unwrap_or(0.0).abs().max(current.dphi.abs());
         let ddu = s.ddphi.unwrap_or(0.0).abs().max(current.ddphi.abs());
-        let scale = [u + du * h + ddu * h * h, u / h + du + ddu * h, u / (h * h) + du / h + ddu];
+        let (size, inv) = (u + du * h + ddu * h * h, 1.0 / h);
+        let scale = [size, size * inv, size * (inv * inv)];
         let predicted = [current.phi, current.dphi, current.ddphi];
         (0..s.orders()).any(|r| {
             let mismatch = (s.derivative(r) - predicted[r]).abs();
@@ -347,7 +348,8 @@ impl HostSignal {
                 (eval(n), q)
             }
         };
-        let scale = [1.0, 1.0 / h, 1.0 / (h * h)];
+        let inv = 1.0 / h;
+        let scale = [1.0, inv, inv * inv];
         let target = Phi { phi: p[0] * scale[0], dphi: p[1] * scale[1], ddphi: p[2] * scale[2] };
         let error = [0, 1, 2].map(|k| {
             let e = (p[k] - q[k]).abs() * scale[k];
@@ -406,11 +408,14 @@ impl HostSignal {
         let r0 = b0 - (a0 - a1 * d + a2 * d * d);
         let r1 = b1 - (a1 - 2.0 * a2 * d);
         let r2 = b2 - a2;
-        let (d2, d3) = (d * d, d * d * d);
-        let (d4, d5) = (d2 * d2, d2 * d3);
-        let c3 = -(d2 * r2 + 4.0 * d * r1 + 10.0 * r0) / d3;
-        let c4 = -(2.0 * d2 * r2 + 7.0 * d * r1 + 15.0 * r0) / d4;
-        let c5 = -(d2 * r2 + 3.0 * d * r1 + 6.0 * r0) / d5;
+        // One division: the powers of 1/d by products.
+        let d2 = d * d;
+        let i1 = 1.0 / d;
+        let (i3, i4) = (i1 * i1 * i1, i1 * i1 * i1 * i1);
+        let i5 = i4 * i1;
+        let c3 = -(d2 * r2 + 4.0 * d * r1 + 10.0 * r0) * i3;
+        let c4 = -(2.0 * d2 * r2 + 7.0 * d * r1 + 15.0 * r0) * i4;
+        let c5 = -(d2 * r2 + 3.0 * d * r1 + 6.0 * r0) * i5;
         let at_one = |c3: f64, c4: f64, c5: f64| {
             [
                 a0 + a1 + a2 + c3 + c4 + c5,
@@ -418,8 +423,8 @@ impl HostSignal {
                 2.0 * a2 + 6.0 * c3 + 12.0 * c4 + 20.0 * c5,
             ]
         };
-        let q3 = -(d * r1 + 4.0 * r0) / d3;
-        let q4 = -(d * r1 + 3.0 * r0) / d4;
+        let q3 = -(d * r1 + 4.0 * r0) * i3;
+        let q4 = -(d * r1 + 3.0 * r0) * i4;
         Some((at_one(c3, c4, c5), at_one(q3, q4, 0.0)))
     }
 

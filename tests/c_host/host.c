@@ -24,6 +24,7 @@
  * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB]
  *                     [--save-state S STATE.bin] [--resume STATE.bin]
  *                     [--no-dlclose | --reloads R]
+ *        host UNZIPDIR --bench-dostep ROUNDS [--feed FEED]
  * --so loads another build of the library (with the unzipped FMU's modelDescription.xml);
  * --cycles 0 and --threads 0 skip checks 2 and 3.
  * --save-state S FILE: in the scene (check 1), after communication step S (t = S*h, once its
@@ -36,6 +37,8 @@
  * each other and with checks 2 and 3.
  * --no-dlclose keeps the library loaded at exit; --reloads R then loads, uses (one plain and one
  * FMU-state cycle) and unloads it R more times.
+ * --bench-dostep ROUNDS replaces the checks by the benchmark of fmi2DoStep (section 4, run by
+ * `cargo xtask bench`); --feed FEED runs one way of sending phi only (for a profiler).
  * Exit code: 0 when every check passed, 1 on a failure (with a message on stderr), 2 on bad usage.
  *
  * What differs between POSIX and Windows (loading the library and its error text, threads and
@@ -1192,6 +1195,7 @@ static int bench_case(const Host *h, int feed, double hc, double *seconds, int *
     fmi2Component c = instantiate(h, &ctx, &cb, m->guid, fmi2CoSimulation, fmi2False);
     if (!c) return fail(err, "%s: fmi2Instantiate returned NULL (%s)", who, ctx.last);
     int rc = -1;
+    double *p = NULL;
     const int n = (int)lround(T_END / hc);
     const fmi2Integer law = PHI_SOURCE_LAW, taylor = 2;
     const int input = feed >= FEED_VALUES, derivatives = feed >= FEED_DERIVATIVES;
@@ -1203,14 +1207,18 @@ static int bench_case(const Host *h, int feed, double hc, double *seconds, int *
     OK(f->ExitInitializationMode(c));
     const fmi2ValueReference two[2] = {m->phi, m->phi};
     const fmi2Integer orders[2] = {1, 2};
-    double p[3];
+    /* The host's signal is computed before the clock starts: the loop times the FMU's calls. */
+    if (input && !(p = malloc(sizeof(double) * 3 * (size_t)n))) {
+        fail(err, "%s: out of memory", who);
+        goto out;
+    }
+    for (int k = 0; input && k < n; k++) paper_law(k * hc, p + 3 * k);
     double t0 = now();
     for (int k = 0; k < n; k++) {
         double tc = k * hc;
         if (input) {
-            paper_law(tc, p);
-            OK(f->SetReal(c, &m->phi, 1, &p[0]));
-            if (derivatives) OK(f->SetRealInputDerivatives(c, two, 2, orders, &p[1]));
+            OK(f->SetReal(c, &m->phi, 1, p + 3 * k));
+            if (derivatives) OK(f->SetRealInputDerivatives(c, two, 2, orders, p + 3 * k + 1));
         }
         OK(f->DoStep(c, tc, hc, fmi2True));
     }
@@ -1219,13 +1227,14 @@ static int bench_case(const Host *h, int feed, double hc, double *seconds, int *
     OK(f->Terminate(c));
     rc = 0;
 out:
+    free(p);
     f->FreeInstance(c);
     return rc;
 }
 
 /* ROUNDS rounds after a warm-up round 0, each running every feed at every communication step in
  * an order shuffled with the round as seed; one CSV row per run on stdout. */
-static int bench_dostep(const Host *h, int rounds, Err *err) {
+static int bench_dostep(const Host *h, int rounds, const char *only, Err *err) {
     enum { N_CASES = N_FEEDS * N_BENCH_H };
     int order[N_CASES];
     printf("round,feed,h,steps,seconds\n");
@@ -1241,6 +1250,7 @@ static int bench_dostep(const Host *h, int rounds, Err *err) {
         for (int i = 0; i < N_CASES; i++) {
             int feed = order[i] / (int)N_BENCH_H;
             double hc = BENCH_H[order[i] % (int)N_BENCH_H];
+            if (only && strcmp(only, FEEDS[feed])) continue;
             double seconds = 0.0;
             int steps = 0;
             if (bench_case(h, feed, hc, &seconds, &steps, err)) return -1;
@@ -1257,7 +1267,7 @@ static int usage(void) {
     fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB] "
                     "[--save-state S STATE.bin] [--resume STATE.bin] "
                     "[--no-dlclose | --reloads R]\n"
-                    "       host UNZIPDIR --bench-dostep ROUNDS\n");
+                    "       host UNZIPDIR --bench-dostep ROUNDS [--feed FEED]\n");
     return 2;
 }
 
@@ -1272,6 +1282,7 @@ static void resources_uri(char *dst, size_t cap, const char *unzipdir) {
 int main(int argc, char **argv) {
     const char *unzipdir = NULL, *out_csv = NULL, *so = NULL;
     int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1, bench_rounds = -1;
+    const char *bench_only = NULL;
     StateIO io = {.save_step = -1};
     platform_init();
     for (int a = 1; a < argc; a++) {
@@ -1292,6 +1303,8 @@ int main(int argc, char **argv) {
             io.resume_file = argv[++a];
         else if (!strcmp(argv[a], "--bench-dostep") && a + 1 < argc)
             bench_rounds = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--feed") && a + 1 < argc)
+            bench_only = argv[++a];
         else if (!strcmp(argv[a], "--no-dlclose"))
             do_dlclose = 0;
         else if (argv[a][0] != '-' && !unzipdir)
@@ -1322,7 +1335,7 @@ int main(int argc, char **argv) {
     Api api;
     if (load_api(lib, &api, &err)) goto failed;
     Host host = {&api, &model, resources};
-    if (bench_rounds >= 0) return bench_dostep(&host, bench_rounds, &err) ? (fprintf(stderr, "host: FAILED: %s\n", err.msg), 1) : 0;
+    if (bench_rounds >= 0) return bench_dostep(&host, bench_rounds, bench_only, &err) ? (fprintf(stderr, "host: FAILED: %s\n", err.msg), 1) : 0;
     printf("host library=%s guid=%s\n", lib_path, model.guid);
 
     if (check_scene(&host, out_csv, &io, &err)) goto failed;
