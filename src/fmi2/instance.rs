@@ -999,6 +999,66 @@ mod tests {
         assert!(worst < 1e-6, "worst difference {worst}");
     }
 
+    /// Where each field of a serialized state lies: (name, offset in the payload, bytes).
+    struct Layout(Vec<(&'static str, usize, usize)>, usize);
+
+    impl crate::solver::StateVisitor for Layout {
+        fn real(&mut self, name: &'static str, _: &mut f64) {
+            self.0.push((name, self.1, 8));
+            self.1 += 8;
+        }
+        fn count(&mut self, name: &'static str, _: &mut u64) {
+            self.0.push((name, self.1, 8));
+            self.1 += 8;
+        }
+        fn flag(&mut self, name: &'static str, _: &mut bool) {
+            self.0.push((name, self.1, 1));
+            self.1 += 1;
+        }
+    }
+
+    /// Writes `fuzz/regressions/deserialize/*` again in the current state format, each the
+    /// state of the paper's scene at t = 0.51 s with one defect the fuzzer once found
+    /// accepted: bump [`super::super::state::VERSION`] and run
+    /// `cargo test --lib write_fuzz_regressions -- --ignored`. Each file is a mode byte 1
+    /// (the reader of the regressions and the fuzz target reseal the rest) and the bytes.
+    #[test]
+    #[ignore = "regenerates files: cargo test --lib write_fuzz_regressions -- --ignored"]
+    fn write_fuzz_regressions() {
+        let (mut inst, _) = law_instance(1e-6);
+        let h = 0.0085;
+        for k in 0..60 {
+            assert_eq!(inst.do_step(k as f64 * h, h), Status::Ok);
+        }
+        let snap = inst.get_state().unwrap();
+        let bytes = inst.serialize(&snap).unwrap();
+        let mut layout = Layout(Vec::new(), 0);
+        super::super::state::visit_core(&mut snap.as_ref().clone(), &mut layout).unwrap();
+        let header = bytes.len() - 8 - layout.1;
+        let at = |name: &str, k: usize| {
+            let (_, offset, _) = *layout.0.iter().filter(|f| f.0 == name).nth(k).unwrap();
+            header + offset
+        };
+        let dir =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions/deserialize");
+        let write = |file: &str, edit: &dyn Fn(&mut Vec<u8>)| {
+            let mut b = bytes.clone();
+            edit(&mut b);
+            let mut out = vec![1u8];
+            out.extend_from_slice(&b);
+            std::fs::write(dir.join(file), out).unwrap();
+        };
+        // The flag of the LU cleared, its factors left in.
+        write("lu-factors-without-an-lu", &|b| b[at("lu", 0)] = 0);
+        // tolerance_defined cleared, the tolerance left in.
+        write("tolerance-value-without-its-flag", &|b| b[at("tolerance_defined", 0)] = 0);
+        // The law's piece (the turn, kind 0) with a real it does not use.
+        write("unused-reals-of-the-law-piece", &|b| {
+            let i = at("piece", 1);
+            b[i..i + 8].copy_from_slice(&0.5f64.to_le_bytes());
+        });
+    }
+
     #[test]
     fn serialized_state_continues_bit_for_bit() {
         let (mut a, _) = law_instance(1e-6);
