@@ -238,6 +238,24 @@ fn read_cases(path: &Path) -> Result<Vec<Case>> {
 // ---------------------------------------------------------------------------------------
 // `cargo xtask bench`.
 
+/// `cargo xtask bench-dostep`: the cost of one fmi2DoStep alone ([`dostep`]).
+pub fn run_dostep(mode: Mode) -> Result {
+    let dir = bench_dir();
+    create_dir(&dir)?;
+    let fmu_dir = fmu::prepare()?;
+    dostep_report(mode, &fmu_dir, &dir)
+}
+
+/// Runs the DoStep benchmark, prints its table and, in the full run, copies it to docs/.
+fn dostep_report(mode: Mode, fmu_dir: &Path, dir: &Path) -> Result {
+    let table = dostep::run(mode, fmu_dir, dir)?;
+    println!("\n{table}");
+    if mode == Mode::Full {
+        write_text(&project_root().join("docs").join("dostep.md"), &table)?;
+    }
+    Ok(())
+}
+
 pub fn run(mode: Mode) -> Result {
     let started = Instant::now();
     let dir = bench_dir();
@@ -364,12 +382,7 @@ pub fn run(mode: Mode) -> Result {
 
     // The cost of one fmi2DoStep, from a bare C host (after the rounds: nothing else runs).
     let phase = Instant::now();
-    let table = dostep::run(mode, &fmu_dir, &dir)?;
-    println!("\n{table}");
-    if mode == Mode::Full {
-        let docs = root.join("docs").join("dostep.md");
-        write_text(&docs, &table)?;
-    }
+    dostep_report(mode, &fmu_dir, &dir)?;
     let dostep_time = phase.elapsed();
 
     println!("\nOutputs:");
