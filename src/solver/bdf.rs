@@ -1036,11 +1036,25 @@ impl<const N: usize> Bdf<N> {
     fn eta_same_order(&self, dsm: f64) -> f64 {
         let q = self.q;
         let grows = BIAS_SAME * dsm <= math::powi(1.0 / ETA_THRESHOLD - ADDON, q as i32 + 1);
-        if grows {
-            step_ratio(BIAS_SAME, dsm, q + 1)
-        } else {
+        if !grows {
             1.0
+        } else if self.capped(BIAS_SAME * dsm, q + 1) {
+            self.eta_max
+        } else {
+            step_ratio(BIAS_SAME, dsm, q + 1)
         }
+    }
+
+    /// Whether the step ratio 1/((bias·err)^(1/k) + ADDON) of `bias_err` = bias·err is surely
+    /// above `eta_max`, which then caps it ([`limit_growth`](Self::limit_growth)), when
+    /// eta_max is itself a growth (≥ ETA_THRESHOLD): the ratio need not be computed. A
+    /// comparison with an integer power, with a margin of a factor 2 in bias·err (2^(1/k) in
+    /// the ratio) that no rounding of the root bridges, so the step is what the root gives.
+    /// This is the common case of a step held short by the landing on a communication point,
+    /// where the estimate would allow far more.
+    fn capped(&self, bias_err: f64, k: usize) -> bool {
+        let r = 1.0 / self.eta_max - ADDON;
+        self.eta_max >= ETA_THRESHOLD && bias_err <= 0.5 * math::powi(r, k as i32)
     }
 
     /// The order among q − 1, q, q + 1 that allows the largest step, and that step's ratio
@@ -1051,22 +1065,20 @@ impl<const N: usize> Bdf<N> {
         let q = self.q;
         let log_root = |bias: f64, err: f64, k: usize| math::ln(bias * err) / k as f64;
         let log_same = log_root(BIAS_SAME, dsm, q + 1);
-        let log_down = if q > 1 {
-            let ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
-            log_root(BIAS_DOWN, ddn, q)
-        } else {
-            f64::INFINITY
-        };
+        let (mut ddn, mut log_down) = (f64::INFINITY, f64::INFINITY);
+        if q > 1 {
+            ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
+            log_down = log_root(BIAS_DOWN, ddn, q);
+        }
         let qmax = self.cfg.max_order;
-        let log_up = if q != qmax && self.saved_tq5 != 0.0 {
+        let (mut dup, mut log_up) = (f64::INFINITY, f64::INFINITY);
+        if q != qmax && self.saved_tq5 != 0.0 {
             let ratio = (self.coeffs.tq[5] / self.saved_tq5)
                 * math::powi(self.h / self.tau[2], q as i32 + 1);
             let diff = self.acor - self.zn[qmax] * ratio;
-            let dup = self.wrms(&diff) * self.coeffs.tq[3];
-            log_root(BIAS_UP, dup, q + 2)
-        } else {
-            f64::INFINITY
-        };
+            dup = self.wrms(&diff) * self.coeffs.tq[3];
+            log_up = log_root(BIAS_UP, dup, q + 2);
+        }
         let (mut best, mut q_next) = (log_same, q);
         if log_down < best && log_down <= log_up {
             best = log_down;
@@ -1075,6 +1087,15 @@ impl<const N: usize> Bdf<N> {
             best = log_up;
             q_next = q + 1;
             self.zn[qmax] = self.acor;
+        }
+        let bias_err = match q_next.cmp(&q) {
+            std::cmp::Ordering::Less => BIAS_DOWN * ddn,
+            std::cmp::Ordering::Equal => BIAS_SAME * dsm,
+            std::cmp::Ordering::Greater => BIAS_UP * dup,
+        };
+        // The exponent of the chosen order's error: q for q − 1, q + 1 for q, q + 2 for q + 1.
+        if self.capped(bias_err, q_next + 1) {
+            return (q_next, self.eta_max);
         }
         (q_next, 1.0 / (math::exp(best) + ADDON))
     }
