@@ -199,6 +199,14 @@ impl HostSignal {
     /// Records the host's sample at the start of a step. Samples at or after its time are
     /// dropped first: a host that went back in time restored an older state.
     fn push(&mut self, s: Sample) {
+        if self.len == 0 || self.history[0].t < s.t {
+            // The common case, a newer sample: all move one down, the oldest of a full
+            // history drops out (the unused ones are zeros, and stay so).
+            self.history.copy_within(0..HISTORY - 1, 1);
+            self.history[0] = s;
+            self.len = (self.len + 1).min(HISTORY);
+            return;
+        }
         let keep = (0..self.len).find(|&k| self.history[k].t < s.t).unwrap_or(self.len);
         let kept = (self.len - keep).min(HISTORY - 1);
         self.history.copy_within(keep..keep + kept, 1);

@@ -73,6 +73,19 @@ fn step_ratio(bias: f64, err: f64, exponent: usize) -> f64 {
     1.0 / (root(bias * err, exponent) + ADDON)
 }
 
+/// Whether a^(1/k) < b^(1/l) for (a, k) and (b, l), a and b ≥ 0 or infinite: as
+/// a^l < b^k, two integer powers, where these cannot overflow or underflow (a and b 0,
+/// infinite or within 1e±40, and k, l ≤ 7), else as log(a)/k < log(b)/l. The two agree but
+/// at ties within round-off.
+fn root_less((a, k): (f64, usize), (b, l): (f64, usize)) -> bool {
+    let tame = |x: f64| x == 0.0 || x.is_infinite() || (1e-40..=1e40).contains(&x);
+    if tame(a) && tame(b) && k <= 7 && l <= 7 {
+        math::powi(a, l as i32) < math::powi(b, k as i32)
+    } else {
+        math::ln(a) / (k as f64) < math::ln(b) / (l as f64)
+    }
+}
+
 /// x^(1/k), by square roots where they serve (k = 1, 2, 4): a fraction of the cost of
 /// `powf`, which the order selection calls two or three times every other step. (Rust's
 /// `cbrt` is correctly rounded and no cheaper than `powf`.)
@@ -1059,45 +1072,38 @@ impl<const N: usize> Bdf<N> {
 
     /// The order among q − 1, q, q + 1 that allows the largest step, and that step's ratio
     /// (CVODE cvChooseEta, from the error estimates of cvComputeEtaqm1 and cvComputeEtaqp1).
-    /// The candidates are compared by log((bias·err)^(1/k)), the smallest giving the largest
-    /// η: three logarithms and at most one exp cost less than three powf.
+    /// The candidates (bias·err)^(1/k) are compared by integer powers ([`root_less`]), the
+    /// smallest giving the largest η; the chosen one's ratio is exp(log(bias·err)/k), one
+    /// logarithm and one exp, unless eta_max caps it anyway.
     fn eta_and_order(&mut self, dsm: f64) -> (usize, f64) {
         let q = self.q;
-        let log_root = |bias: f64, err: f64, k: usize| math::ln(bias * err) / k as f64;
-        let log_same = log_root(BIAS_SAME, dsm, q + 1);
-        let (mut ddn, mut log_down) = (f64::INFINITY, f64::INFINITY);
+        let same = (BIAS_SAME * dsm, q + 1);
+        let mut down = (f64::INFINITY, q);
         if q > 1 {
-            ddn = self.wrms(&self.zn[q]) * self.coeffs.tq[1];
-            log_down = log_root(BIAS_DOWN, ddn, q);
+            down.0 = BIAS_DOWN * (self.wrms(&self.zn[q]) * self.coeffs.tq[1]);
         }
         let qmax = self.cfg.max_order;
-        let (mut dup, mut log_up) = (f64::INFINITY, f64::INFINITY);
+        let mut up = (f64::INFINITY, q + 2);
         if q != qmax && self.saved_tq5 != 0.0 {
             let ratio = (self.coeffs.tq[5] / self.saved_tq5)
                 * math::powi(self.h / self.tau[2], q as i32 + 1);
             let diff = self.acor - self.zn[qmax] * ratio;
-            dup = self.wrms(&diff) * self.coeffs.tq[3];
-            log_up = log_root(BIAS_UP, dup, q + 2);
+            up.0 = BIAS_UP * (self.wrms(&diff) * self.coeffs.tq[3]);
         }
-        let (mut best, mut q_next) = (log_same, q);
-        if log_down < best && log_down <= log_up {
-            best = log_down;
+        let (mut best, mut q_next) = (same, q);
+        if root_less(down, best) && !root_less(up, down) {
+            best = down;
             q_next = q - 1;
-        } else if log_up < best {
-            best = log_up;
+        } else if root_less(up, best) {
+            best = up;
             q_next = q + 1;
             self.zn[qmax] = self.acor;
         }
-        let bias_err = match q_next.cmp(&q) {
-            std::cmp::Ordering::Less => BIAS_DOWN * ddn,
-            std::cmp::Ordering::Equal => BIAS_SAME * dsm,
-            std::cmp::Ordering::Greater => BIAS_UP * dup,
-        };
-        // The exponent of the chosen order's error: q for q − 1, q + 1 for q, q + 2 for q + 1.
-        if self.capped(bias_err, q_next + 1) {
+        let (bias_err, k) = best;
+        if self.capped(bias_err, k) {
             return (q_next, self.eta_max);
         }
-        (q_next, 1.0 / (math::exp(best) + ADDON))
+        (q_next, 1.0 / (math::exp(math::ln(bias_err) / k as f64) + ADDON))
     }
 
     /// The order k ≤ `limit` (and ≤ q) and step ratio η with the largest step among those the
