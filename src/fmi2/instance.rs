@@ -208,14 +208,21 @@ impl Instance {
 
     /// The one place where a result becomes an FMI status: a failure is logged with its
     /// message and returns its status.
+    #[inline]
     pub fn edge<T>(&mut self, result: FmiResult<T>) -> Result<T, Status> {
-        result.map_err(|e| {
-            self.log(e.status, &e.message);
-            e.status
-        })
+        result.map_err(|e| self.failed(e))
+    }
+
+    /// The failure of [`edge`](Self::edge), out of the calls' fast path.
+    #[cold]
+    #[inline(never)]
+    fn failed(&mut self, e: FmiError) -> Status {
+        self.log(e.status, &e.message);
+        e.status
     }
 
     /// [`edge`](Self::edge) for calls that return a status only.
+    #[inline]
     fn status(&mut self, result: FmiResult) -> Status {
         self.edge(result).unwrap_or_else(|status| status)
     }
@@ -245,21 +252,29 @@ impl Instance {
 
     /// Refuses every call on a fatal instance before the call touches anything (its
     /// arguments included): logs the illegal call and returns false.
+    #[inline]
     pub fn check_not_fatal(&mut self, func: &str) -> bool {
         let allowed = self.allowed(func, mask::ANY_BUT_FATAL);
         self.edge(allowed).is_ok()
     }
 
     /// Whether `func` may be called in the current state.
+    #[inline]
     fn allowed(&self, func: &str, mask: u32) -> FmiResult<()> {
         let state = self.core.state;
         if mask & state.bit() != 0 {
             return Ok(());
         }
-        Err(FmiError::error(format!(
+        Err(Self::illegal(func, state))
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn illegal(func: &str, state: State) -> FmiError {
+        FmiError::error(format!(
             "{func}: illegal call sequence: not allowed in state `{}`",
             state.name()
-        )))
+        ))
     }
 
     /// fmi2SetDebugLogging. `categories`: `None` where the host passed NULL or invalid
@@ -413,22 +428,27 @@ impl Instance {
     // ----- get and set --------------------------------------------------------------------
 
     /// Finds `vr` and checks it has base type `base`.
+    #[inline]
     fn lookup(func: &str, vr: u32, base: BaseType) -> FmiResult<&'static Variable> {
-        let var = Var::from_vr(vr).ok_or_else(|| {
-            FmiError::error(format!(
-                "{func}: unknown value reference {vr}: must be below {}",
-                VARIABLES.len()
-            ))
-        })?;
-        let info = var.info();
-        if info.ty.base() != base {
-            return Err(FmiError::error(format!(
+        match VARIABLES.get(vr as usize) {
+            Some(info) if info.ty.base() == base => Ok(info),
+            found => Err(Self::bad_reference(func, vr, base, found)),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn bad_reference(func: &str, vr: u32, base: BaseType, found: Option<&Variable>) -> FmiError {
+        FmiError::error(match found {
+            None => {
+                format!("{func}: unknown value reference {vr}: must be below {}", VARIABLES.len())
+            }
+            Some(info) => format!(
                 "{func}: value reference {vr} is `{}`, a {:?} variable, not a {base:?}",
                 info.name,
                 info.ty.base()
-            )));
-        }
-        Ok(info)
+            ),
+        })
     }
 
     /// The motion at the communication time, computed now if it is not cached, and the
