@@ -537,10 +537,10 @@ impl Run {
     /// Chooses the piece for the interval to `t` from a pending sample.
     fn begin(&mut self, t: f64) -> Result<(), SimError> {
         let now = self.t();
-        let current = self.piece.eval(now);
         let (PhiInput::Host(signal), Some(sample)) = (&mut self.input, self.sample.take()) else {
             return Ok(());
         };
+        let current = self.piece.eval(now);
         let poly = signal.plan(sample, current, t - now).map_err(|e| {
             SimError::Setting(format!(
                 "{e} (phi = {:?} at t = {now}, h = {:?})",

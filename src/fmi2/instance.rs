@@ -7,8 +7,8 @@
 #![forbid(unsafe_code)]
 
 use super::binding::{self, Group, Value};
-pub use super::core::State;
-use super::core::{Core, OutputCache, Setup};
+pub use super::core::{Core, State};
+use super::core::{OutputCache, Setup};
 use super::state;
 use super::variables::{
     BaseType, Causality, Var, Variable, CAPABILITIES, LOG_CATEGORIES, VARIABLES,
