@@ -50,8 +50,10 @@ The controller (two degrees of freedom: a planned turn plus feedback around it)
        phi''_k = phi''_plan,k - K_k (x_measured(t_k) - x_plan,k),   x = (v1, theta1, dv1, dtheta1, phi, phi')
    with x measured from the FMU's outputs. The command is integrated exactly (phi, phi' continuous,
    phi'' constant over the step) and sent as phi with its derivatives of orders 1 and 2
-   (fmi2SetRealInputDerivatives), so the FMU applies the same quadratic piece the controller planned
-   and does not have to extrapolate.
+   (fmi2SetRealInputDerivatives) with phi_interpolation = taylor, so the FMU applies the same
+   quadratic piece the controller planned and does not extrapolate (the default, smooth, would join
+   the pieces C2 and extrapolate across the command's jumps of phi'', which the controller did not
+   plan).
 
 When the internal model is right, the plan alone already leaves almost nothing and the feedback has
 little to correct. The loop matters when the plant differs from the model: the table therefore also
@@ -92,6 +94,7 @@ OUTPUTS = ("v1", "theta1", "u2", "dv1", "dtheta1", "du2", "N", "P", "M", "drift"
            "phi_applied", "dphi_applied", "ddphi_applied")
 PARAMS = ("l", "EI", "m", "M2", "J_C", "r", "g", "t_rot", "phi_end")
 PHI_SOURCE_INPUT, PHI_SOURCE_LAW = 1, 2
+PHI_INTERPOLATION_TAYLOR = 2  # phi_interpolation: 1 = smooth (the default), 2 = taylor
 X_FINAL = np.array([0.0, 0.0, 0.0, 0.0, PI, 0.0])  # rest at phi = pi (v1_eq(pi) = theta1_eq(pi) = 0)
 
 # --------------------------------------------------------------------------------------------------
@@ -374,6 +377,7 @@ def simulate(fmu: Fmu, t_end: float, h: float, controller=None, plant: dict | No
     try:
         s.setupExperiment(tolerance=tol, startTime=0.0)
         s.setInteger([fmu.vr["phi_source"]], [PHI_SOURCE_LAW if controller is None else PHI_SOURCE_INPUT])
+        s.setInteger([fmu.vr["phi_interpolation"]], [PHI_INTERPOLATION_TAYLOR])
         for k_, v in (plant or {}).items():
             s.setReal([fmu.vr[k_]], [float(v)])
         s.enterInitializationMode()

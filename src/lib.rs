@@ -17,12 +17,14 @@
 //! scene.set("t_end", "1.0").unwrap();
 //! scene.set("formulation", "dae-stabilized").unwrap();
 //! let mut rows = Vec::new();
-//! let stats = simulate(&scene, |o| rows.push(*o)).unwrap();
+//! let stats = simulate(&scene, |o| rows.push(*o)).unwrap().stats;
 //! let last = rows.last().unwrap();
 //! assert_eq!(last.t, 1.0);
 //! assert_eq!(last.drift, 0.0); // projected onto u2 = u1(v1, ϑ1)
 //! assert!(last.v1.abs() < 1.0 && stats.rejected() < stats.steps);
 //! ```
+
+#![deny(unsafe_code)]
 
 pub mod fmi2;
 pub mod math;

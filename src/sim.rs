@@ -7,10 +7,10 @@
 #![forbid(unsafe_code)]
 
 use crate::model::{
-    BeamBody, DaeSystem, Formulation, Outputs, PaperLaw, ParamError, Params, Phi, PhiPiece,
-    TaylorSignal, TwoDofSystem, ValueHistory,
+    BeamBody, DaeSystem, Formulation, HostSignal, Interpolation, Kinematics, Outputs, PaperLaw,
+    ParamError, Params, Phi, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem, HISTORY,
 };
-use crate::solver::{Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
+use crate::solver::{check_rtol, Bdf, BdfConfig, FixedStep, SolverError, StateVisitor, Stats};
 use nalgebra::SVector;
 use std::fmt;
 
@@ -23,51 +23,6 @@ pub struct InitialState {
     pub dtheta1: f64,
 }
 
-/// Integrator settings of a run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SolverOptions {
-    /// Relative tolerance. Default 1e-6.
-    pub rtol: f64,
-    /// Absolute tolerance for every state. Default `None`: 1e-3·rtol.
-    pub atol: Option<f64>,
-    /// Highest BDF order, 1..=5. Default 5.
-    pub max_order: usize,
-    /// The paper's constant-step mode. Default `None`.
-    pub fixed_step: Option<FixedStep>,
-    /// The BDF3–5 stability guard. Default on.
-    pub stability_guard: bool,
-    /// Most internal steps in one call of the integrator (one output interval, one FMI
-    /// communication step), ≥ 1. Default 10⁷.
-    pub max_steps: u64,
-}
-
-impl Default for SolverOptions {
-    fn default() -> Self {
-        Self {
-            rtol: 1e-6,
-            atol: None,
-            max_order: 5,
-            fixed_step: None,
-            stability_guard: true,
-            max_steps: 10_000_000,
-        }
-    }
-}
-
-impl SolverOptions {
-    pub fn config<const N: usize>(&self) -> BdfConfig<N> {
-        let mut cfg = BdfConfig::new(self.rtol);
-        if let Some(a) = self.atol {
-            cfg.atol = SVector::from_element(a);
-        }
-        cfg.max_order = self.max_order;
-        cfg.fixed_step = self.fixed_step;
-        cfg.stability_guard = self.stability_guard;
-        cfg.max_steps = self.max_steps;
-        cfg
-    }
-}
-
 /// How φ reaches the model in a standalone run. The sampled feeds do what an FMI host does
 /// with the FMU at communication step `dt_comm`, so the FMU can be checked against them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,8 +32,7 @@ pub enum PhiFeed {
     /// At each communication point, the law's φ, φ', φ'' as a Taylor polynomial over the
     /// step (a host that sends derivatives).
     Derivatives,
-    /// The law's values at the communication points only, extrapolated by
-    /// [`ValueHistory`] (a host that sends values).
+    /// The law's values at the communication points only (a host that sends values).
     Values,
 }
 
@@ -89,7 +43,7 @@ pub struct Scene {
     pub law: PaperLaw,
     pub initial: InitialState,
     pub formulation: Formulation,
-    pub solver: SolverOptions,
+    pub solver: BdfConfig,
     /// End time [s], > 0. Default 10.
     pub t_end: f64,
     /// Output step [s], > 0. Default 0.01.
@@ -100,6 +54,12 @@ pub struct Scene {
     pub dt_comm: f64,
     /// Degree of the extrapolation of [`PhiFeed::Values`], 0..=3. Default 3.
     pub phi_extrapolation: usize,
+    /// How the sampled feeds are interpolated between communication points. Default
+    /// [`Interpolation::Smooth`].
+    pub phi_interpolation: Interpolation,
+    /// What the run does when the state leaves the range of validity. Default
+    /// [`RangeCheck::Stop`].
+    pub range_check: RangeCheck,
 }
 
 impl Default for Scene {
@@ -109,18 +69,20 @@ impl Default for Scene {
             law: PaperLaw::default(),
             initial: InitialState::default(),
             formulation: Formulation::Reduced,
-            solver: SolverOptions::default(),
+            solver: BdfConfig::default(),
             t_end: 10.0,
             dt_out: 0.01,
             phi_feed: PhiFeed::Law,
             dt_comm: 0.01,
-            phi_extrapolation: ValueHistory::MAX_DEGREE,
+            phi_extrapolation: HISTORY - 1,
+            phi_interpolation: Interpolation::Smooth,
+            range_check: RangeCheck::Stop,
         }
     }
 }
 
 /// Names [`Scene::set`] accepts besides the model parameters.
-pub const SCENE_KEYS: [&str; 19] = [
+pub const SCENE_KEYS: [&str; 21] = [
     "t_rot",
     "phi_end",
     "phi0",
@@ -140,6 +102,8 @@ pub const SCENE_KEYS: [&str; 19] = [
     "phi_feed",
     "dt_comm",
     "phi_extrapolation",
+    "phi_interpolation",
+    "range_check",
 ];
 
 impl Scene {
@@ -156,6 +120,14 @@ impl Scene {
                 "false" | "0" => false,
                 _ => return Err(format!("`stability_guard` = {text}: must be true or false")),
             };
+            return Ok(());
+        }
+        if name == "range_check" {
+            self.range_check = text.parse()?;
+            return Ok(());
+        }
+        if name == "phi_interpolation" {
+            self.phi_interpolation = text.parse()?;
             return Ok(());
         }
         if name == "phi_feed" {
@@ -200,8 +172,13 @@ impl Scene {
             "theta1_0" => range(finite, "finite").map(|_| self.initial.theta1 = value),
             "dv1_0" => range(finite, "finite").map(|_| self.initial.dv1 = value),
             "dtheta1_0" => range(finite, "finite").map(|_| self.initial.dtheta1 = value),
-            "rtol" => range((1e-14..=1.0).contains(&value), "in [1e-14, 1]")
-                .map(|_| self.solver.rtol = value),
+            "rtol" => match check_rtol(value) {
+                Ok(()) => {
+                    let _: () = self.solver.rtol = value;
+                    Ok(())
+                }
+                Err(allowed) => range(false, allowed),
+            },
             "atol" => {
                 range(positive, "positive and finite").map(|_| self.solver.atol = Some(value))
             }
@@ -319,66 +296,89 @@ fn grid(step: f64, t_end: f64) -> impl Iterator<Item = f64> {
     (0..=last).map(move |k| if k == last { t_end } else { k as f64 * step })
 }
 
-/// Runs the scene, calling `sink` with the outputs at every output time. Returns the
-/// integrator's counters.
-pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Stats, SimError> {
-    let model = scene.validate()?;
-    let law = scene.law;
-    // As the FMU starts: the law, the host's derivatives, or the value at rest.
-    let start = match scene.phi_feed {
-        PhiFeed::Law => law.piece_from(0.0),
-        PhiFeed::Derivatives => {
-            PhiPiece::Taylor(TaylorSignal { t0: 0.0, at_t0: law.eval(0.0), jerk: 0.0 })
-        }
-        PhiFeed::Values => PhiPiece::Taylor(TaylorSignal {
-            t0: 0.0,
-            at_t0: Phi { phi: law.eval(0.0).phi, dphi: 0.0, ddphi: 0.0 },
-            jerk: 0.0,
-        }),
-    };
-    let mut run = Run::new(model, scene.formulation, &scene.solver, 0.0, scene.initial, start)?;
-    let mut outputs = scene.output_times().peekable();
-    if scene.phi_feed == PhiFeed::Law {
-        for t in outputs {
-            run.advance_law(&law, t, scene.t_end)?;
-            sink(&run.outputs_at(t)?);
-        }
-        return Ok(run.stats());
-    }
-    let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
-    let mut history = ValueHistory::default();
-    for w in comm.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let signal = match scene.phi_feed {
-            PhiFeed::Derivatives => TaylorSignal { t0: a, at_t0: law.eval(a), jerk: 0.0 },
-            _ => {
-                history.push(a, law.eval(a).phi);
-                let start = run.piece().eval(a);
-                history.piece(scene.phi_extrapolation, start, b - a).expect("a sample, h > 0")
-            }
-        };
-        run.switch_piece(PhiPiece::Taylor(signal))?;
-        while let Some(&t) = outputs.peek() {
-            if t > b {
-                break;
-            }
-            run.advance(t, b)?;
-            sink(&run.outputs_at(t)?);
-            outputs.next();
-        }
-        run.advance(b, b)?;
-    }
-    Ok(run.stats())
+/// What a finished run reports besides its outputs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// The integrator's counters.
+    pub stats: Stats,
+    /// With `range_check = warn`: where the run left the range of validity.
+    pub warning: Option<String>,
 }
 
-/// The integrator and the model for a formulation chosen at run time, advanced piece by
-/// piece of φ. The standalone driver ([`simulate`]) and the FMU both step through it, so they
-/// integrate the same way. `Clone` copies everything (FMU state save and restore).
+/// Runs the scene, calling `sink` with the outputs at every output time.
+pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Report, SimError> {
+    let model = scene.validate()?;
+    let (law, solver, init) = (scene.law, &scene.solver, scene.initial);
+    let mut warning = None;
+    let mut emit = |run: &mut Run, t: f64| {
+        if let Some(w) = run.take_warning() {
+            warning = Some(w);
+        }
+        sink(&run.outputs_at(t)?);
+        Ok(())
+    };
+    let outputs = scene.output_times();
+    let mut run = if scene.phi_feed == PhiFeed::Law {
+        let mut run = Run::with_law(model, scene.formulation, solver, 0.0, init, law)?;
+        run.set_range_check(scene.range_check);
+        run.step_to_sampling(scene.t_end, outputs, &mut emit)?;
+        run
+    } else {
+        // As a host does: the law's value (and derivatives) at each communication point.
+        let sample = |t: f64| match scene.phi_feed {
+            PhiFeed::Derivatives => Sample::with_derivatives(t, law.eval(t)),
+            _ => Sample::value(t, law.eval(t).phi),
+        };
+        let signal = HostSignal::new(scene.phi_interpolation, scene.phi_extrapolation);
+        let mut run =
+            Run::with_host(model, scene.formulation, solver, 0.0, init, signal, sample(0.0))?;
+        run.set_range_check(scene.range_check);
+        let mut outputs = outputs.peekable();
+        let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
+        for w in comm.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            run.set_sample(sample(a));
+            let mut times = Vec::new();
+            while let Some(t) = outputs.next_if(|&t| t <= b) {
+                times.push(t);
+            }
+            run.step_to_sampling(b, times, &mut emit)?;
+        }
+        run
+    };
+    Ok(Report { stats: run.stats(), warning: warning.or_else(|| run.take_warning()) })
+}
+
+/// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
+/// one, so boxing would only add an indirection to every piece.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhiInput {
+    /// The paper's law; the integrator lands on its breakpoint t_rot and restarts there.
+    Law(PaperLaw),
+    /// A host's samples at the communication points ([`Run::set_sample`]).
+    Host(HostSignal),
+}
+
+/// The integrator and the model for a formulation chosen at run time, with the φ input they
+/// are driven by. The standalone driver ([`simulate`]) and the FMU both step through it
+/// ([`step_to`](Self::step_to)), so they integrate the same way. `Clone` copies everything
+/// (FMU state save and restore).
 #[derive(Clone, Debug)]
 pub struct Run {
     model: BeamBody,
     formulation: Formulation,
+    input: PhiInput,
+    /// The piece of φ in use: what the right-hand side evaluates.
     piece: PhiPiece,
+    /// The host's sample at the current time, for the next step.
+    sample: Option<Sample>,
+    /// What to do when the state leaves the range of validity, as set, and now: `Warn`
+    /// becomes `Off` once it has warned.
+    range_set: RangeCheck,
+    range: RangeCheck,
+    /// The warning of `Warn`, until [`take_warning`](Self::take_warning).
+    warning: Option<String>,
     bdf: Integrator,
 }
 
@@ -388,11 +388,12 @@ fn within_rounding(a: f64, b: f64) -> bool {
 }
 
 fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
-    TwoDofSystem { model, phi, linear: formulation == Formulation::Linear }
+    TwoDofSystem { model, phi, linear: formulation == Formulation::Linear, range_check: true }
 }
 
 fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
-    DaeSystem { model, phi, stabilized: formulation == Formulation::DaeStabilized }
+    let stabilized = formulation == Formulation::DaeStabilized;
+    DaeSystem { model, phi, stabilized, range_check: true }
 }
 
 /// Four states (reduced, linear) or six (dae, dae-stabilized). The variants differ by
@@ -405,26 +406,61 @@ enum Integrator {
 }
 
 impl Run {
-    /// A run from `init` at `t0`, with φ from `piece` until [`set_piece`](Self::set_piece).
-    /// The DAE's u2 and u̇2 start consistent.
-    pub fn new(
+    /// A run from `init` at `t0` driven by the law. The DAE's u2 and u̇2 start consistent.
+    pub fn with_law(
         model: BeamBody,
         formulation: Formulation,
-        options: &SolverOptions,
+        options: &BdfConfig,
         t0: f64,
         init: InitialState,
+        law: PaperLaw,
+    ) -> Result<Self, SolverError> {
+        Self::new(model, formulation, options, t0, init, PhiInput::Law(law), law.piece_from(t0))
+    }
+
+    /// A run from `init` at `t0` driven by a host, whose sample at t0 is `first`.
+    pub fn with_host(
+        model: BeamBody,
+        formulation: Formulation,
+        options: &BdfConfig,
+        t0: f64,
+        init: InitialState,
+        mut signal: HostSignal,
+        first: Sample,
+    ) -> Result<Self, SolverError> {
+        let piece = PhiPiece::Poly(signal.start(Sample { t: t0, ..first }));
+        Self::new(model, formulation, options, t0, init, PhiInput::Host(signal), piece)
+    }
+
+    fn new(
+        model: BeamBody,
+        formulation: Formulation,
+        options: &BdfConfig,
+        t0: f64,
+        init: InitialState,
+        input: PhiInput,
         piece: PhiPiece,
     ) -> Result<Self, SolverError> {
         let bdf = if formulation.is_dae() {
             let free =
                 SVector::<f64, 6>::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
             let y0 = dae(&model, piece, formulation).consistent(&free);
-            Integrator::Dae(Bdf::new(options.config(), t0, y0)?)
+            Integrator::Dae(Bdf::new(*options, t0, y0)?)
         } else {
             let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            Integrator::Two(Bdf::new(options.config(), t0, y0)?)
+            Integrator::Two(Bdf::new(*options, t0, y0)?)
         };
-        Ok(Self { model, formulation, piece, bdf })
+        Ok(Self {
+            model,
+            formulation,
+            input,
+            piece,
+            sample: None,
+            range_set: RangeCheck::Stop,
+            range: RangeCheck::Stop,
+            warning: None,
+            bdf,
+        })
     }
 
     pub fn model(&self) -> &BeamBody {
@@ -433,6 +469,10 @@ impl Run {
 
     pub fn formulation(&self) -> Formulation {
         self.formulation
+    }
+
+    pub fn input(&self) -> &PhiInput {
+        &self.input
     }
 
     /// The solver's time: that of its last step.
@@ -455,30 +495,101 @@ impl Run {
         }
     }
 
-    /// Uses `piece` for φ from now on. With `restart`, the integrator drops its step history
-    /// and restarts at order 1 (for a jump of φ''); without, the error test sees the change.
-    pub fn set_piece(&mut self, piece: PhiPiece, restart: bool) -> Result<(), SolverError> {
+    /// The host's φ (and the derivatives it sent) at the current time, for the next
+    /// [`step_to`](Self::step_to); its time is taken as the run's. The law ignores it.
+    pub fn set_sample(&mut self, sample: Sample) {
+        self.sample = Some(Sample { t: self.t(), ..sample });
+    }
+
+    /// Steps to exactly `t`. See [`step_to_sampling`](Self::step_to_sampling).
+    pub fn step_to(&mut self, t: f64) -> Result<(), SimError> {
+        self.step_to_sampling(t, [], |_, _| Ok(()))
+    }
+
+    /// Steps to exactly `t`, calling `sink` at each of `times` (increasing, up to t) on the
+    /// way, with the run stepped past it. With a host's input, a sample set since the last
+    /// call gives the piece of φ for the whole interval to t; without one, the piece in use
+    /// goes on. With the law, the integrator lands on its breakpoint and restarts there with
+    /// the next piece, so f is never evaluated across the jump of φ''.
+    ///
+    /// On failure the run is at its last accepted step, with the piece it got there with,
+    /// so its outputs there are valid (a host's signal keeps the sample it was given).
+    pub fn step_to_sampling(
+        &mut self,
+        t: f64,
+        times: impl IntoIterator<Item = f64>,
+        mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
+    ) -> Result<(), SimError> {
+        let (t0, piece) = (self.t(), self.piece);
+        let result = self.begin(t).and_then(|()| {
+            for tout in times {
+                self.advance_to(tout.min(t), t)?;
+                sink(self, tout)?;
+            }
+            Ok(self.advance_to(t, t)?)
+        });
+        if result.is_err() && self.t() <= t0 {
+            self.piece = piece;
+        }
+        result
+    }
+
+    /// Chooses the piece for the interval to `t` from a pending sample.
+    fn begin(&mut self, t: f64) -> Result<(), SimError> {
+        let now = self.t();
+        let (PhiInput::Host(signal), Some(sample)) = (&mut self.input, self.sample.take()) else {
+            return Ok(());
+        };
+        let current = self.piece.eval(now);
+        let poly = signal.plan(sample, current, t - now).map_err(|e| {
+            SimError::Setting(format!(
+                "{e} (phi = {:?} at t = {now}, h = {:?})",
+                sample.phi,
+                t - now
+            ))
+        })?;
+        self.switch_piece(PhiPiece::Poly(poly), current)?;
+        Ok(())
+    }
+
+    /// Switches to `piece`. The integrator restarts where φ or φ′ jump at the current time
+    /// (by more than round-off), and where φ″ does by so much that its step history would
+    /// not survive it ([`Bdf::change_of_rhs`] above 1): kept across such a jump of f, the
+    /// history makes the error test fail repeatedly at tight tolerances (the paper's scene
+    /// with values every 8.5 ms failed at rtol 1e-10). A smaller change, as a C¹ join of a
+    /// smooth input makes it at short communication steps, keeps the history.
+    /// `old` is φ of the piece in use at the current time.
+    fn switch_piece(&mut self, piece: PhiPiece, old: Phi) -> Result<(), SolverError> {
+        let new = match piece {
+            PhiPiece::Poly(p) if p.t0 == self.t() => p.at_start(),
+            _ => piece.eval(self.t()),
+        };
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
+        let restart = if !(same(old.phi, new.phi) && same(old.dphi, new.dphi)) {
+            true
+        } else if same(old.ddphi, new.ddphi) {
+            false
+        } else {
+            let (model, formulation) = (&self.model, self.formulation);
+            let change = match &mut self.bdf {
+                Integrator::Two(b) => b.change_of_rhs(&two_dof(model, piece, formulation)),
+                Integrator::Dae(b) => b.change_of_rhs(&dae(model, piece, formulation)),
+            };
+            change > 1.0
+        };
         self.piece = piece;
         if restart {
-            match &mut self.bdf {
-                Integrator::Two(b) => b.reinit(b.t(), *b.y()),
-                Integrator::Dae(b) => b.reinit(b.t(), *b.y()),
-            }?;
+            self.restart()?;
         }
         Ok(())
     }
 
-    /// Switches to `piece`, restarting the integrator if φ, φ' or φ'' jump at the current
-    /// time (by more than round-off). A jump of φ'' is a jump of f: kept across it, the step
-    /// history makes the error test fail repeatedly at tight tolerances (the paper's scene
-    /// with derivatives sent every 8.5 ms failed at rtol 1e-10 without this restart).
-    pub fn switch_piece(&mut self, piece: PhiPiece) -> Result<(), SolverError> {
-        let t = self.t();
-        let (old, new) = (self.piece.eval(t), piece.eval(t));
-        let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
-        let jump =
-            !(same(old.phi, new.phi) && same(old.dphi, new.dphi) && same(old.ddphi, new.ddphi));
-        self.set_piece(piece, jump)
+    /// Drops the integrator's step history: it goes on at order 1 from its state.
+    fn restart(&mut self) -> Result<(), SolverError> {
+        match &mut self.bdf {
+            Integrator::Two(b) => b.reinit(b.t(), *b.y()),
+            Integrator::Dae(b) => b.reinit(b.t(), *b.y()),
+        }
     }
 
     fn two_dof(&self) -> TwoDofSystem<'_> {
@@ -489,29 +600,11 @@ impl Run {
         dae(&self.model, self.piece, self.formulation)
     }
 
-    /// Steps with the current piece until t ≥ `tout`, never past `tstop`
-    /// ([`Bdf::advance`]).
-    /// A `tout` within rounding of the solver's time takes no step.
-    pub fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
-        if tout > self.t() && within_rounding(tout, self.t()) {
-            return Ok(());
-        }
-        let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
-        match &mut self.bdf {
-            Integrator::Two(b) => b.advance(&two_dof(model, piece, formulation), tout, tstop),
-            Integrator::Dae(b) => b.advance(&dae(model, piece, formulation), tout, tstop),
-        }
-    }
-
-    /// [`advance`](Self::advance) with φ from `law`: lands exactly on the law's breakpoint
-    /// and restarts there with the next piece, so f is never evaluated across the jump of
-    /// φ''. The current piece must be `law.piece_from(self.t())`.
-    pub fn advance_law(
-        &mut self,
-        law: &PaperLaw,
-        tout: f64,
-        tstop: f64,
-    ) -> Result<(), SolverError> {
+    /// Steps until t ≥ `tout`, never past `tstop`, through the law's breakpoint.
+    fn advance_to(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
+        let PhiInput::Law(law) = self.input else {
+            return self.advance(tout, tstop);
+        };
         let bp = law.breakpoint();
         // A stop within rounding of the breakpoint is the breakpoint (a host's tc + h), so the
         // integrator never takes a step of a few ulps after landing on it.
@@ -520,7 +613,8 @@ impl Run {
         loop {
             let turning = matches!(self.piece, PhiPiece::Turn(_));
             if turning && self.t() >= bp && tout > self.t() {
-                self.set_piece(law.piece_from(bp), true)?;
+                self.piece = law.piece_from(bp);
+                self.restart()?;
                 continue;
             }
             if turning && tout > bp && tstop > bp {
@@ -532,11 +626,61 @@ impl Run {
         }
     }
 
+    /// Steps with the current piece until t ≥ `tout`, never past `tstop`
+    /// ([`Bdf::advance`]). A `tout` within rounding of the solver's time takes no step. With
+    /// `range_check = warn`, the first step out of the range of validity records a warning
+    /// and the run goes on without the check.
+    fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
+        loop {
+            if tout > self.t() && within_rounding(tout, self.t()) {
+                return Ok(());
+            }
+            let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
+            let range_check = self.range != RangeCheck::Off;
+            let result = match &mut self.bdf {
+                Integrator::Two(b) => {
+                    let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
+                    b.advance(&sys, tout, tstop)
+                }
+                Integrator::Dae(b) => {
+                    let sys = DaeSystem { range_check, ..dae(model, piece, formulation) };
+                    b.advance(&sys, tout, tstop)
+                }
+            };
+            match result {
+                Err(e @ SolverError::OutOfRange { .. }) if self.range == RangeCheck::Warn => {
+                    self.warning = Some(format!(
+                        "{e}; the run goes on outside the range of validity (range_check = warn)"
+                    ));
+                    self.range = RangeCheck::Off;
+                }
+                other => return other,
+            }
+        }
+    }
+
+    /// What to do when the state leaves the range of validity (default `Stop`).
+    pub fn set_range_check(&mut self, range: RangeCheck) {
+        self.range_set = range;
+        self.range = range;
+    }
+
+    /// The warning of `range_check = warn`, once: `Some` after the step that left the range.
+    pub fn take_warning(&mut self) -> Option<String> {
+        self.warning.take()
+    }
+
     /// The outputs at `t` inside the last step (dense output), with the current piece.
     pub fn outputs_at(&self, t: f64) -> Result<Outputs, SolverError> {
+        Ok(self.kinematics_at(t)?.outputs(&self.model))
+    }
+
+    /// The motion at `t` inside the last step (dense output): the outputs without the
+    /// reactions and the energy, which follow from it.
+    pub fn kinematics_at(&self, t: f64) -> Result<Kinematics, SolverError> {
         Ok(match &self.bdf {
-            Integrator::Two(b) => self.two_dof().outputs(t, &b.interpolate(t)?),
-            Integrator::Dae(b) => self.dae().outputs(t, &b.interpolate(t)?),
+            Integrator::Two(b) => self.two_dof().kinematics(t, &b.interpolate(t)?),
+            Integrator::Dae(b) => self.dae().kinematics(t, &b.interpolate(t)?),
         })
     }
 
@@ -562,21 +706,78 @@ impl Run {
         }
     }
 
-    /// Visits the integrator's state ([`Bdf::visit_state`]); the model, formulation and
-    /// settings are the caller's to restore.
+    /// Visits the run's state: the piece of φ in use, the host's signal and the integrator
+    /// ([`Bdf::visit_state`]). The model, formulation, settings and law are the caller's to
+    /// restore (by building the run from them first); [`check_state`](Self::check_state)
+    /// then validates what a reader wrote.
     pub fn visit_state(&mut self, v: &mut impl StateVisitor) {
+        let (mut kind, mut r) = match self.piece {
+            PhiPiece::Turn(_) => (0u64, [0.0; 8]),
+            PhiPiece::Hold(x) => (1, [x, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+            PhiPiece::Poly(p) => {
+                let c = p.c;
+                (2, [p.t0, p.h, c[0], c[1], c[2], c[3], c[4], c[5]])
+            }
+        };
+        v.count("piece_kind", &mut kind);
+        for x in r.iter_mut() {
+            v.real("piece", x);
+        }
+        // The law's piece uses none of the reals, a held angle only the first: the others
+        // are written as zeros and must read as zeros (one byte form per state).
+        let used = [0, 1, 8].get(kind as usize).copied().unwrap_or(8);
+        v.discarded("piece", r[used..].iter().all(|x| x.to_bits() == 0));
+        self.piece = match (kind, self.input) {
+            (0, PhiInput::Law(law)) => PhiPiece::Turn(law),
+            (1, _) => PhiPiece::Hold(r[0]),
+            (2, _) => {
+                PhiPiece::Poly(Poly { t0: r[0], h: r[1], c: [r[2], r[3], r[4], r[5], r[6], r[7]] })
+            }
+            // Refused by `check_state`: a law's turn in a host-driven run, or a bad kind.
+            _ => PhiPiece::Hold(f64::NAN),
+        };
+        if let PhiInput::Host(signal) = &mut self.input {
+            signal.visit(v);
+        }
+        let mut warned = self.range != self.range_set;
+        v.flag("range_warned", &mut warned);
+        self.range = if warned { RangeCheck::Off } else { self.range_set };
+        if warned && self.range_set != RangeCheck::Warn {
+            // Refused by `check_state`.
+            self.range_set = RangeCheck::Stop;
+            self.range = RangeCheck::Warn;
+        }
         match &mut self.bdf {
             Integrator::Two(b) => b.visit_state(v),
             Integrator::Dae(b) => b.visit_state(v),
         }
     }
 
-    /// Checks a state written by a visitor ([`Bdf::check_state`]).
-    pub fn check_state(&self) -> Result<(), SolverError> {
+    /// Checks a state written by a visitor: the piece (finite, and of a kind the input
+    /// makes), the signal ([`HostSignal::check`]) and the integrator ([`Bdf::check_state`]).
+    pub fn check_state(&self) -> Result<(), String> {
+        let ok = match (self.piece, self.input) {
+            (PhiPiece::Turn(_), PhiInput::Law(_)) => true,
+            (PhiPiece::Hold(x), PhiInput::Law(_)) => x.is_finite(),
+            (PhiPiece::Poly(p), PhiInput::Host(_)) => p.is_finite() && p.h > 0.0,
+            _ => false,
+        };
+        if !ok {
+            return Err("field `piece`: not a finite piece of φ that this input makes".into());
+        }
+        if let PhiInput::Host(signal) = &self.input {
+            signal.check()?;
+        }
+        let range_ok = self.range == self.range_set
+            || (self.range_set == RangeCheck::Warn && self.range == RangeCheck::Off);
+        if !range_ok {
+            return Err("field `range_warned`: set, but range_check is not warn".into());
+        }
         match &self.bdf {
             Integrator::Two(b) => b.check_state(),
             Integrator::Dae(b) => b.check_state(),
         }
+        .map_err(|e| e.to_string())
     }
 }
 
@@ -621,19 +822,16 @@ mod tests {
             let scene = Scene { formulation, ..Scene::default() };
             let model = scene.validate().unwrap();
             let law = scene.law;
-            let mut run = Run::new(
-                model,
-                formulation,
-                &scene.solver,
-                0.0,
-                scene.initial,
-                law.piece_from(0.0),
-            )
+            let mut run =
+                Run::with_law(model, formulation, &scene.solver, 0.0, scene.initial, law).unwrap();
+            let (mut o, mut y, mut n) = (None, [0.0; 6], 0);
+            run.step_to_sampling(1.0, [0.5], |run, t| {
+                o = Some(run.outputs_at(t)?);
+                n = run.state_at(t, &mut y)?;
+                Ok(())
+            })
             .unwrap();
-            run.advance_law(&law, 0.5, 1.0).unwrap();
-            let o = run.outputs_at(0.5).unwrap();
-            let mut y = [0.0; 6];
-            let n = run.state_at(0.5, &mut y).unwrap();
+            let o = o.unwrap();
             let want: Vec<f64> = if formulation.is_dae() {
                 vec![o.v1, o.theta1, o.u2, o.dv1, o.dtheta1, o.du2]
             } else {

@@ -15,7 +15,7 @@ fn paper() -> Scene {
 
 fn run(scene: &Scene) -> (Vec<Outputs>, Stats) {
     let mut rows = Vec::new();
-    let stats = simulate(scene, |o| rows.push(*o)).unwrap_or_else(|e| panic!("{e}"));
+    let stats = simulate(scene, |o| rows.push(*o)).unwrap_or_else(|e| panic!("{e}")).stats;
     (rows, stats)
 }
 

@@ -159,14 +159,18 @@ fn cmd_simulate(args: &[String]) -> Result<(), Usage> {
     if let Some(e) = io_error.or_else(|| out.flush().err()) {
         return Err(Usage(format!("writing the CSV failed: {e}")));
     }
-    let stats = result.map_err(|e| Usage(e.to_string()))?;
+    let report = result.map_err(|e| Usage(e.to_string()))?;
+    if let Some(w) = &report.warning {
+        eprintln!("beam-body: warning: {w}");
+    }
+    let stats = report.stats;
     let s = scene.solver;
     let mode = match s.fixed_step {
         Some(f) => format!("fixed step h = {:e} s, order {}", f.h, f.order),
         None => format!(
             "rtol {:e}, atol {:e}, max order {}, guard {}",
             s.rtol,
-            s.atol.unwrap_or(1e-3 * s.rtol),
+            s.atol(),
             s.max_order,
             if s.stability_guard { "on" } else { "off" }
         ),

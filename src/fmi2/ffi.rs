@@ -10,11 +10,16 @@
 //! (FMI 2.0.4): a dozen type aliases and one struct do not justify bindgen and libclang
 //! (ARCHITECTURE.md, "Dependencies").
 #![allow(non_snake_case, non_camel_case_types, non_upper_case_globals)]
+#![allow(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn)]
 
-use super::instance::{Core, Instance, Logger, Status};
+use super::core::Core;
+use super::instance::{Instance, Logger, Status};
+use std::cell::Cell;
 use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 pub type fmi2Component = *mut c_void;
@@ -88,17 +93,43 @@ fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
     out
 }
 
+/// How many instances have been freed: a pointer found live at one count is live while the
+/// count stays the same.
+static FREED: AtomicU64 = AtomicU64::new(0);
+
+thread_local! {
+    /// The last instance this thread found live, with the count of frees then. It spares the
+    /// registry's lock on every call after the first (an uncontended lock and a B-tree lookup
+    /// cost about as much as a third of a step at a 0.1 ms communication step). No destructor:
+    /// the library registers none for its threads.
+    static LAST_LIVE: Cell<(usize, u64)> = const { Cell::new((0, u64::MAX)) };
+}
+
+/// Whether `c` is a live instance: from this thread's last answer while no instance has been
+/// freed since, else from the registry.
+fn is_live(c: usize) -> bool {
+    let freed = FREED.load(Ordering::Acquire);
+    if LAST_LIVE.with(Cell::get) == (c, freed) {
+        return true;
+    }
+    let live = with_registry(|r| r.instances.contains(&c));
+    if live {
+        LAST_LIVE.with(|last| last.set((c, freed)));
+    }
+    live
+}
+
 /// The instance behind `c`, if `c` is a live instance of this library.
 ///
 /// # Safety
 /// The host must not use the same instance from two threads at once (FMI 2.0 §2.1.1).
 unsafe fn instance<'a>(c: fmi2Component) -> Option<&'a mut Instance> {
-    if c.is_null() || !with_registry(|r| r.instances.contains(&(c as usize))) {
+    if c.is_null() || !is_live(c as usize) {
         return None;
     }
     // SAFETY: registered pointers come from Box::into_raw in fmi2Instantiate and are removed
     // before fmi2FreeInstance drops them.
-    Some(&mut *(c as *mut Instance))
+    Some(unsafe { &mut *(c as *mut Instance) })
 }
 
 /// The snapshot behind `s`, if `s` is a live FMU state of this library.
@@ -107,7 +138,7 @@ unsafe fn snapshot<'a>(s: fmi2FMUstate) -> Option<&'a mut Core> {
         return None;
     }
     // SAFETY: registered pointers come from Box::into_raw in this module.
-    Some(&mut *(s as *mut Core))
+    Some(unsafe { &mut *(s as *mut Core) })
 }
 
 /// Registers a new FMU state made by `owner`.
@@ -171,7 +202,8 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if p.is_null() || !p.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
         return None;
     }
-    Some(std::slice::from_raw_parts(p, n))
+    // SAFETY: non-NULL, aligned, and the caller guarantees n valid elements.
+    Some(unsafe { std::slice::from_raw_parts(p, n) })
 }
 
 /// Mutable counterpart of [`slice`].
@@ -182,7 +214,8 @@ unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if p.is_null() || !p.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
         return None;
     }
-    Some(std::slice::from_raw_parts_mut(p, n))
+    // SAFETY: non-NULL, aligned, and the caller guarantees n valid elements.
+    Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
 }
 
 /// A C string as UTF-8; `None` for NULL or invalid UTF-8.
@@ -190,7 +223,8 @@ unsafe fn text<'a>(s: fmi2String) -> Option<&'a str> {
     if s.is_null() {
         return None;
     }
-    CStr::from_ptr(s).to_str().ok()
+    // SAFETY: non-NULL, and the caller guarantees a NUL-terminated string.
+    unsafe { CStr::from_ptr(s) }.to_str().ok()
 }
 
 fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> Status {
@@ -227,10 +261,12 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const fmi2String,
 ) -> fmi2Status {
     guard(c, "fmi2SetDebugLogging", |inst| {
-        let Some(cats) = slice(categories, nCategories) else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(cats) = (unsafe { slice(categories, nCategories) }) else {
             return null_arg(inst, "fmi2SetDebugLogging", "categories", nCategories);
         };
-        let names: Vec<Option<&str>> = cats.iter().map(|s| text(*s)).collect();
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let names: Vec<Option<&str>> = cats.iter().map(|s| unsafe { text(*s) }).collect();
         inst.set_debug_logging(loggingOn != fmi2False, &names)
     })
 }
@@ -274,11 +310,13 @@ pub unsafe extern "C" fn fmi2Instantiate(
     loggingOn: fmi2Boolean,
 ) -> fmi2Component {
     let made = catch_unwind(AssertUnwindSafe(|| {
-        let functions = functions.as_ref()?;
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let functions = unsafe { functions.as_ref() }?;
         let name = if instanceName.is_null() {
             None
         } else {
-            Some(CStr::from_ptr(instanceName).to_string_lossy().into_owned())
+            // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+            Some(unsafe { CStr::from_ptr(instanceName) }.to_string_lossy().into_owned())
         };
         let mut log = host_logger(functions, name.as_deref().unwrap_or("(null)"))?;
         let Some(name) = name else {
@@ -288,7 +326,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let guid = if fmuGUID.is_null() {
             "(null)".into()
         } else {
-            CStr::from_ptr(fmuGUID).to_string_lossy()
+            // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+            unsafe { CStr::from_ptr(fmuGUID) }.to_string_lossy()
         };
         let inst = Instance::instantiate(&name, fmuType, &guid, log, loggingOn != fmi2False)?;
         let p = Box::into_raw(Box::new(inst)) as fmi2Component;
@@ -308,6 +347,8 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
         if !r.instances.remove(&owner) {
             return None;
         }
+        // Every thread's cached answer for a live instance is now stale.
+        FREED.fetch_add(1, Ordering::Release);
         let mine: Vec<usize> =
             r.states.iter().filter(|(_, o)| **o == owner).map(|(s, _)| *s).collect();
         for s in &mine {
@@ -320,10 +361,10 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     };
     for s in orphans {
         // SAFETY: registered states come from Box::into_raw and were just unregistered.
-        drop(Box::from_raw(s as *mut Core));
+        drop(unsafe { Box::from_raw(s as *mut Core) });
     }
     // SAFETY: it was registered, so it came from Box::into_raw and is freed only here.
-    let mut boxed = Box::from_raw(c as *mut Instance);
+    let mut boxed = unsafe { Box::from_raw(c as *mut Instance) };
     let _ = catch_unwind(AssertUnwindSafe(move || {
         boxed.trace_free();
         drop(boxed)
@@ -391,7 +432,8 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetReal", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetReal", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => inst.get_real(vr, value),
         (None, _) => null_arg(inst, "fmi2GetReal", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2GetReal", "value", nvr),
@@ -407,7 +449,8 @@ pub unsafe extern "C" fn fmi2GetInteger(
     nvr: usize,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    guard(c, "fmi2GetInteger", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetInteger", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => inst.get_integer(vr, value),
         (None, _) => null_arg(inst, "fmi2GetInteger", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2GetInteger", "value", nvr),
@@ -423,7 +466,8 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2GetBoolean", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetBoolean", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => {
             let mut flags = vec![false; vr.len()];
             let status = inst.get_boolean(vr, &mut flags);
@@ -448,7 +492,8 @@ pub unsafe extern "C" fn fmi2GetString(
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    guard(c, "fmi2GetString", |inst| match (slice(vr, nvr), slice_mut(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2GetString", |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(_)) => inst.get_string(vr),
         (None, _) => null_arg(inst, "fmi2GetString", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2GetString", "value", nvr),
@@ -464,7 +509,8 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2SetReal", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetReal", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => inst.set_real(vr, value),
         (None, _) => null_arg(inst, "fmi2SetReal", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2SetReal", "value", nvr),
@@ -480,7 +526,8 @@ pub unsafe extern "C" fn fmi2SetInteger(
     nvr: usize,
     value: *const fmi2Integer,
 ) -> fmi2Status {
-    guard(c, "fmi2SetInteger", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetInteger", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => inst.set_integer(vr, value),
         (None, _) => null_arg(inst, "fmi2SetInteger", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2SetInteger", "value", nvr),
@@ -496,7 +543,8 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    guard(c, "fmi2SetBoolean", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetBoolean", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => {
             let flags: Vec<bool> = value.iter().map(|b| *b != fmi2False).collect();
             inst.set_boolean(vr, &flags)
@@ -515,7 +563,8 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    guard(c, "fmi2SetString", |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, "fmi2SetString", |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(_)) => inst.set_string(vr),
         (None, _) => null_arg(inst, "fmi2SetString", "vr", nvr),
         (_, None) => null_arg(inst, "fmi2SetString", "value", nvr),
@@ -529,7 +578,8 @@ pub unsafe extern "C" fn fmi2SetString(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     guard(c, "fmi2GetFMUstate", |inst| {
-        let Some(slot) = state.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(slot) = (unsafe { state.as_mut() }) else {
             return null_arg(inst, "fmi2GetFMUstate", "FMUstate", 1);
         };
         if slot.is_null() {
@@ -541,7 +591,8 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
                 Err(status) => status,
             };
         }
-        match snapshot(*slot) {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        match unsafe { snapshot(*slot) } {
             Some(existing) => inst.get_state_into(existing),
             None => unknown_state(inst, "fmi2GetFMUstate"),
         }
@@ -557,7 +608,8 @@ fn unknown_state(inst: &mut Instance, func: &str) -> Status {
 /// `c` is an instance; `state` is a state from fmi2GetFMUstate or fmi2DeSerializeFMUstate.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    guard(c, "fmi2SetFMUstate", |inst| match snapshot(state) {
+    // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+    guard(c, "fmi2SetFMUstate", |inst| match unsafe { snapshot(state) } {
         Some(core) => inst.set_state(core),
         None => unknown_state(inst, "fmi2SetFMUstate"),
     })
@@ -572,7 +624,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
     guard(c, "fmi2FreeFMUstate", |inst| {
-        let Some(slot) = state.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(slot) = (unsafe { state.as_mut() }) else {
             return null_arg(inst, "fmi2FreeFMUstate", "FMUstate", 1);
         };
         let status = inst.check_free_state(slot.is_null());
@@ -583,7 +636,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
             return unknown_state(inst, "fmi2FreeFMUstate");
         }
         // SAFETY: it was registered, so it came from Box::into_raw and is freed only here.
-        drop(Box::from_raw(*slot as *mut Core));
+        drop(unsafe { Box::from_raw(*slot as *mut Core) });
         *slot = std::ptr::null_mut();
         Status::Ok
     })
@@ -598,10 +651,12 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     size: *mut usize,
 ) -> fmi2Status {
     guard(c, "fmi2SerializedFMUstateSize", |inst| {
-        let Some(size) = size.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(size) = (unsafe { size.as_mut() }) else {
             return null_arg(inst, "fmi2SerializedFMUstateSize", "size", 1);
         };
-        let Some(core) = snapshot(state) else {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        let Some(core) = (unsafe { snapshot(state) }) else {
             return unknown_state(inst, "fmi2SerializedFMUstateSize");
         };
         match inst.serialized_size(core) {
@@ -626,14 +681,16 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
 ) -> fmi2Status {
     const F: &str = "fmi2SerializeFMUstate";
     guard(c, F, |inst| {
-        let Some(core) = snapshot(state) else {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        let Some(core) = (unsafe { snapshot(state) }) else {
             return unknown_state(inst, F);
         };
         let bytes = match inst.serialize(core) {
             Ok(b) => b,
             Err(status) => return status,
         };
-        let Some(out) = slice_mut(serializedState as *mut u8, size) else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(out) = (unsafe { slice_mut(serializedState as *mut u8, size) }) else {
             return null_arg(inst, F, "serializedState", size);
         };
         if out.len() < bytes.len() {
@@ -660,10 +717,12 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 ) -> fmi2Status {
     const F: &str = "fmi2DeSerializeFMUstate";
     guard(c, F, |inst| {
-        let Some(bytes) = slice(serializedState as *const u8, size) else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(bytes) = (unsafe { slice(serializedState as *const u8, size) }) else {
             return null_arg(inst, F, "serializedState", size);
         };
-        let Some(slot) = state.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(slot) = (unsafe { state.as_mut() }) else {
             return null_arg(inst, F, "FMUstate", 1);
         };
         let core = match inst.deserialize(bytes) {
@@ -674,7 +733,8 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
             *slot = register_state(inst, core);
             return Status::Ok;
         }
-        match snapshot(*slot) {
+        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
+        match unsafe { snapshot(*slot) } {
             Some(existing) => {
                 *existing = *core;
                 Status::Ok
@@ -712,7 +772,8 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     value: *const fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2SetRealInputDerivatives";
-    guard(c, F, |inst| match (slice(vr, nvr), slice(order, nvr), slice(value, nvr)) {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, F, |inst| match unsafe { (slice(vr, nvr), slice(order, nvr), slice(value, nvr)) } {
         (Some(vr), Some(order), Some(value)) => inst.set_real_input_derivatives(vr, order, value),
         (None, _, _) => null_arg(inst, F, "vr", nvr),
         (_, None, _) => null_arg(inst, F, "order", nvr),
@@ -725,12 +786,23 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *mut fmi2Real,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetRealOutputDerivatives", Instance::get_real_output_derivatives)
+    const F: &str = "fmi2GetRealOutputDerivatives";
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, F, |inst| {
+        match unsafe { (slice(vr, nvr), slice(order, nvr), slice_mut(value, nvr)) } {
+            (Some(vr), Some(order), Some(value)) => {
+                inst.get_real_output_derivatives(vr, order, value)
+            }
+            (None, _, _) => null_arg(inst, F, "vr", nvr),
+            (_, None, _) => null_arg(inst, F, "order", nvr),
+            (_, _, None) => null_arg(inst, F, "value", nvr),
+        }
+    })
 }
 
 /// # Safety
@@ -772,7 +844,8 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     value: *mut fmi2Real,
 ) -> fmi2Status {
     guard(c, "fmi2GetRealStatus", |inst| {
-        let Some(value) = value.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(value) = (unsafe { value.as_mut() }) else {
             return null_arg(inst, "fmi2GetRealStatus", "value", 1);
         };
         match inst.get_real_status(s) {
@@ -805,7 +878,8 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
     guard(c, "fmi2GetBooleanStatus", |inst| {
-        let Some(value) = value.as_mut() else {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(value) = (unsafe { value.as_mut() }) else {
             return null_arg(inst, "fmi2GetBooleanStatus", "value", 1);
         };
         match inst.get_boolean_status(s) {
@@ -950,12 +1024,15 @@ mod tests {
     /// # Safety
     /// `c` is a live instance.
     unsafe fn to_step_complete(c: fmi2Component) {
-        let source = [Var::PhiSource.vr()];
-        assert_eq!(fmi2SetInteger(c, source.as_ptr(), 1, [2].as_ptr()), OK);
-        assert_eq!(fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0), OK);
-        assert_eq!(fmi2EnterInitializationMode(c), OK);
-        assert_eq!(fmi2ExitInitializationMode(c), OK);
-        assert_eq!(fmi2DoStep(c, 0.0, 0.01, fmi2False), OK);
+        // SAFETY: as this function's contract says.
+        unsafe {
+            let source = [Var::PhiSource.vr()];
+            assert_eq!(fmi2SetInteger(c, source.as_ptr(), 1, [2].as_ptr()), OK);
+            assert_eq!(fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0), OK);
+            assert_eq!(fmi2EnterInitializationMode(c), OK);
+            assert_eq!(fmi2ExitInitializationMode(c), OK);
+            assert_eq!(fmi2DoStep(c, 0.0, 0.01, fmi2False), OK);
+        }
     }
 
     /// Each of the 30 functions that take an instance, called on `c` with arguments that are
@@ -969,81 +1046,99 @@ mod tests {
         snap: fmi2FMUstate,
         bytes: &[u8],
     ) -> Vec<(&'static str, fmi2Status)> {
-        let (rv, iv, bv) = ([Var::Phi.vr()], [Var::MaxOrder.vr()], [Var::StabilityGuard.vr()]);
-        let (mut r, mut i, mut b) = ([0.5], [3], [fmi2True]);
-        let mut string: [fmi2String; 1] = [null()];
-        let cats = [c"logAll".as_ptr()];
-        let mut fresh: fmi2FMUstate = null_mut();
-        let mut existing = snap;
-        let mut none: fmi2FMUstate = null_mut();
-        let mut size = 0usize;
-        let mut out = vec![0u8; bytes.len()];
-        let (mut k, mut flag) = (-1, -1);
-        let bp = bytes.as_ptr() as *const fmi2Byte;
-        let op = out.as_mut_ptr() as *mut fmi2Byte;
-        let outputs = [Var::V1.vr()];
-        let calls = vec![
-            ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2True, 1, cats.as_ptr())),
-            ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2False, 0, null())),
-            ("fmi2SetupExperiment", fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0)),
-            ("fmi2EnterInitializationMode", fmi2EnterInitializationMode(c)),
-            ("fmi2ExitInitializationMode", fmi2ExitInitializationMode(c)),
-            ("fmi2Terminate", fmi2Terminate(c)),
-            ("fmi2Reset", fmi2Reset(c)),
-            ("fmi2GetReal", fmi2GetReal(c, rv.as_ptr(), 1, r.as_mut_ptr())),
-            ("fmi2GetReal", fmi2GetReal(c, null(), 0, null_mut())),
-            ("fmi2GetReal", fmi2GetReal(c, null(), 1, null_mut())),
-            ("fmi2GetInteger", fmi2GetInteger(c, iv.as_ptr(), 1, i.as_mut_ptr())),
-            ("fmi2GetBoolean", fmi2GetBoolean(c, bv.as_ptr(), 1, b.as_mut_ptr())),
-            ("fmi2GetString", fmi2GetString(c, null(), 0, string.as_mut_ptr())),
-            ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [0.25].as_ptr())),
-            ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [f64::NAN].as_ptr())),
-            ("fmi2SetInteger", fmi2SetInteger(c, iv.as_ptr(), 1, [3].as_ptr())),
-            ("fmi2SetBoolean", fmi2SetBoolean(c, bv.as_ptr(), 1, [fmi2False].as_ptr())),
-            ("fmi2SetString", fmi2SetString(c, null(), 0, null())),
-            ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut fresh)),
-            ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut existing)),
-            ("fmi2SetFMUstate", fmi2SetFMUstate(c, snap)),
-            ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut existing)),
-            ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut none)),
-            ("fmi2SerializedFMUstateSize", fmi2SerializedFMUstateSize(c, snap, &mut size)),
-            ("fmi2SerializeFMUstate", fmi2SerializeFMUstate(c, snap, op, out.len())),
-            ("fmi2DeSerializeFMUstate", fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut fresh)),
-            ("fmi2DeSerializeFMUstate", fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut existing)),
-            (
-                "fmi2GetDirectionalDerivative",
-                fmi2GetDirectionalDerivative(
-                    c,
-                    outputs.as_ptr(),
-                    1,
-                    rv.as_ptr(),
-                    1,
-                    [1.0].as_ptr(),
-                    r.as_mut_ptr(),
+        // SAFETY: as this function's contract says.
+        unsafe {
+            let (rv, iv, bv) = ([Var::Phi.vr()], [Var::MaxOrder.vr()], [Var::StabilityGuard.vr()]);
+            let (mut r, mut i, mut b) = ([0.5], [3], [fmi2True]);
+            let mut string: [fmi2String; 1] = [null()];
+            let cats = [c"logAll".as_ptr()];
+            let mut fresh: fmi2FMUstate = null_mut();
+            let mut existing = snap;
+            let mut none: fmi2FMUstate = null_mut();
+            let mut size = 0usize;
+            let mut out = vec![0u8; bytes.len()];
+            let (mut k, mut flag) = (-1, -1);
+            let bp = bytes.as_ptr() as *const fmi2Byte;
+            let op = out.as_mut_ptr() as *mut fmi2Byte;
+            let outputs = [Var::V1.vr()];
+            let calls = vec![
+                ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2True, 1, cats.as_ptr())),
+                ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2False, 0, null())),
+                (
+                    "fmi2SetupExperiment",
+                    fmi2SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2False, 0.0),
                 ),
-            ),
-            (
-                "fmi2SetRealInputDerivatives",
-                fmi2SetRealInputDerivatives(c, rv.as_ptr(), 1, [1].as_ptr(), [0.5].as_ptr()),
-            ),
-            (
-                "fmi2GetRealOutputDerivatives",
-                fmi2GetRealOutputDerivatives(c, outputs.as_ptr(), 1, [1].as_ptr(), r.as_mut_ptr()),
-            ),
-            ("fmi2DoStep", fmi2DoStep(c, 0.01, 0.01, fmi2False)),
-            ("fmi2CancelStep", fmi2CancelStep(c)),
-            ("fmi2GetStatus", fmi2GetStatus(c, 0, &mut k)),
-            ("fmi2GetRealStatus", fmi2GetRealStatus(c, 2, r.as_mut_ptr())),
-            ("fmi2GetIntegerStatus", fmi2GetIntegerStatus(c, 0, &mut k)),
-            ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(c, 3, &mut flag)),
-            ("fmi2GetStringStatus", fmi2GetStringStatus(c, 1, string.as_mut_ptr())),
-        ];
-        // Nothing was written through an output argument.
-        assert!(fresh.is_null() && existing == snap && none.is_null());
-        assert!(out.iter().all(|x| *x == 0) && size == 0);
-        assert_eq!((r, i, b, k, flag), ([0.5], [3], [fmi2True], -1, -1));
-        assert!(string[0].is_null());
-        calls
+                ("fmi2EnterInitializationMode", fmi2EnterInitializationMode(c)),
+                ("fmi2ExitInitializationMode", fmi2ExitInitializationMode(c)),
+                ("fmi2Terminate", fmi2Terminate(c)),
+                ("fmi2Reset", fmi2Reset(c)),
+                ("fmi2GetReal", fmi2GetReal(c, rv.as_ptr(), 1, r.as_mut_ptr())),
+                ("fmi2GetReal", fmi2GetReal(c, null(), 0, null_mut())),
+                ("fmi2GetReal", fmi2GetReal(c, null(), 1, null_mut())),
+                ("fmi2GetInteger", fmi2GetInteger(c, iv.as_ptr(), 1, i.as_mut_ptr())),
+                ("fmi2GetBoolean", fmi2GetBoolean(c, bv.as_ptr(), 1, b.as_mut_ptr())),
+                ("fmi2GetString", fmi2GetString(c, null(), 0, string.as_mut_ptr())),
+                ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [0.25].as_ptr())),
+                ("fmi2SetReal", fmi2SetReal(c, rv.as_ptr(), 1, [f64::NAN].as_ptr())),
+                ("fmi2SetInteger", fmi2SetInteger(c, iv.as_ptr(), 1, [3].as_ptr())),
+                ("fmi2SetBoolean", fmi2SetBoolean(c, bv.as_ptr(), 1, [fmi2False].as_ptr())),
+                ("fmi2SetString", fmi2SetString(c, null(), 0, null())),
+                ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut fresh)),
+                ("fmi2GetFMUstate", fmi2GetFMUstate(c, &mut existing)),
+                ("fmi2SetFMUstate", fmi2SetFMUstate(c, snap)),
+                ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut existing)),
+                ("fmi2FreeFMUstate", fmi2FreeFMUstate(c, &mut none)),
+                ("fmi2SerializedFMUstateSize", fmi2SerializedFMUstateSize(c, snap, &mut size)),
+                ("fmi2SerializeFMUstate", fmi2SerializeFMUstate(c, snap, op, out.len())),
+                (
+                    "fmi2DeSerializeFMUstate",
+                    fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut fresh),
+                ),
+                (
+                    "fmi2DeSerializeFMUstate",
+                    fmi2DeSerializeFMUstate(c, bp, bytes.len(), &mut existing),
+                ),
+                (
+                    "fmi2GetDirectionalDerivative",
+                    fmi2GetDirectionalDerivative(
+                        c,
+                        outputs.as_ptr(),
+                        1,
+                        rv.as_ptr(),
+                        1,
+                        [1.0].as_ptr(),
+                        r.as_mut_ptr(),
+                    ),
+                ),
+                (
+                    "fmi2SetRealInputDerivatives",
+                    fmi2SetRealInputDerivatives(c, rv.as_ptr(), 1, [1].as_ptr(), [0.5].as_ptr()),
+                ),
+                (
+                    "fmi2GetRealOutputDerivatives",
+                    fmi2GetRealOutputDerivatives(
+                        c,
+                        outputs.as_ptr(),
+                        1,
+                        [1].as_ptr(),
+                        r.as_mut_ptr(),
+                    ),
+                ),
+                ("fmi2DoStep", fmi2DoStep(c, 0.01, 0.01, fmi2False)),
+                ("fmi2CancelStep", fmi2CancelStep(c)),
+                ("fmi2GetStatus", fmi2GetStatus(c, 0, &mut k)),
+                ("fmi2GetRealStatus", fmi2GetRealStatus(c, 2, r.as_mut_ptr())),
+                ("fmi2GetIntegerStatus", fmi2GetIntegerStatus(c, 0, &mut k)),
+                ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(c, 3, &mut flag)),
+                ("fmi2GetStringStatus", fmi2GetStringStatus(c, 1, string.as_mut_ptr())),
+            ];
+            // Nothing was written through an output argument.
+            assert!(fresh.is_null() && existing == snap && none.is_null());
+            assert!(out.iter().all(|x| *x == 0) && size == 0);
+            assert_eq!((r, i, b, k, flag), ([0.5], [3], [fmi2True], -1, -1));
+            assert!(string[0].is_null());
+            calls
+        }
     }
 
     /// The fatal state, which only a panic reaches, for all 34 functions (FMI 2.0 §2.1.3:

@@ -17,14 +17,15 @@
 //! history (`Bdf::check_state`). Malformed bytes give an error, never a panic.
 #![forbid(unsafe_code)]
 
-use super::instance::{Core, State, Values};
+use super::binding::{PhiSource, Values};
+use super::core::{Core, State};
 use super::variables::{guid, Causality, VARIABLES};
-use crate::model::{Formulation, Phi, PhiPiece, TaylorSignal, ValueHistory};
-use crate::solver::StateVisitor;
+use crate::model::{Formulation, Interpolation, RangeCheck};
+use crate::solver::{check_rtol, StateVisitor};
 
 const MAGIC: &[u8; 8] = b"BBFMUST\0";
 /// Version of the byte format; bump it when [`visit_core`] changes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 const GUID_LEN: usize = 38;
 const HEADER: usize = 8 + 4 + GUID_LEN + 8;
 
@@ -136,19 +137,6 @@ pub(super) fn visit_core(core: &mut Core, v: &mut impl StateVisitor) -> Result<(
         let names = [("pending_dphi_set", "pending_dphi"), ("pending_ddphi_set", "pending_ddphi")];
         visit_optional(v, names[k].0, names[k].1, slot)?;
     }
-    let mut samples: Vec<(f64, f64)> = core.history.samples().collect();
-    let mut len = samples.len() as u64;
-    v.count("history_len", &mut len);
-    if len > ValueHistory::MAX_DEGREE as u64 + 1 {
-        return Err(format!("field `history_len` = {len} is out of range: at most 4"));
-    }
-    samples.resize(len as usize, (0.0, 0.0));
-    for (t, u) in samples.iter_mut() {
-        v.real("history_t", t);
-        v.real("history_phi", u);
-    }
-    core.history = ValueHistory::from_samples(&samples)
-        .ok_or("field `history`: times must be finite and decreasing, values finite")?;
     check_head(core)?;
 
     let mut has_run = core.run.is_some();
@@ -167,11 +155,8 @@ pub(super) fn visit_core(core: &mut Core, v: &mut impl StateVisitor) -> Result<(
         core.run = Some(core.build_run().map_err(|e| format!("the saved parameters: {e}"))?);
     }
     let run = core.run.as_mut().expect("built above");
-    let mut piece = run.piece();
-    visit_piece(&mut piece, core.values, v)?;
-    run.set_piece(piece, false).map_err(|e| e.to_string())?;
     run.visit_state(v);
-    run.check_state().map_err(|e| e.to_string())?;
+    run.check_state()?;
     // After every step, successful or not, the communication time, the last successful
     // time and the integrator's time agree (up to the rounding of tc + h).
     let fuzz = 64.0 * f64::EPSILON * core.time.abs().max(1.0);
@@ -212,10 +197,20 @@ fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), St
     let mut src = values.phi_source as u64;
     v.count("phi_source", &mut src);
     values.phi_source = match src {
-        0 => super::instance::PhiSource::Input,
-        1 => super::instance::PhiSource::Law,
+        0 => PhiSource::Input,
+        1 => PhiSource::Law,
         _ => return Err(format!("field `phi_source` = {src} is out of range")),
     };
+    let mut range = values.range_check as u64;
+    v.count("range_check", &mut range);
+    values.range_check = *RangeCheck::ALL
+        .get(range as usize)
+        .ok_or_else(|| format!("field `range_check` = {range} is out of range"))?;
+    let mut interp = values.phi_interpolation as u64;
+    v.count("phi_interpolation", &mut interp);
+    values.phi_interpolation = *Interpolation::ALL
+        .get(interp as usize)
+        .ok_or_else(|| format!("field `phi_interpolation` = {interp} is out of range"))?;
     for (name, k) in [
         ("max_order", &mut values.max_order),
         ("fixed_order", &mut values.fixed_order),
@@ -239,10 +234,8 @@ fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), St
 fn check_head(core: &Core) -> Result<(), String> {
     let s = &core.setup;
     if let Some(tol) = s.tolerance {
-        if !(tol.is_finite() && (1e-14..=1.0).contains(&tol)) {
-            return Err(format!(
-                "field `tolerance` = {tol:?} is out of range: must be in [1e-14, 1]"
-            ));
+        if let Err(allowed) = check_rtol(tol) {
+            return Err(format!("field `tolerance` = {tol:?} is out of range: must be {allowed}"));
         }
     }
     if !s.start_time.is_finite() {
@@ -265,49 +258,6 @@ fn check_head(core: &Core) -> Result<(), String> {
     if core.pending.iter().flatten().any(|x| !x.is_finite()) {
         return Err("field `pending` holds a non-finite derivative".into());
     }
-    Ok(())
-}
-
-/// The piece of φ in use: a kind and five reals, whatever the kind.
-fn visit_piece(
-    piece: &mut PhiPiece,
-    values: Values,
-    v: &mut impl StateVisitor,
-) -> Result<(), String> {
-    let (mut kind, mut r) = match *piece {
-        PhiPiece::Turn(_) => (0u64, [0.0; 5]),
-        PhiPiece::Hold(x) => (1, [x, 0.0, 0.0, 0.0, 0.0]),
-        PhiPiece::Taylor(s) => (2, [s.t0, s.at_t0.phi, s.at_t0.dphi, s.at_t0.ddphi, s.jerk]),
-    };
-    v.count("piece_kind", &mut kind);
-    for (name, x) in
-        ["piece_t0", "piece_phi", "piece_dphi", "piece_ddphi", "piece_jerk"].iter().zip(&mut r)
-    {
-        v.real(name, x);
-    }
-    if r.iter().any(|x| !x.is_finite()) {
-        return Err("field `piece` holds a non-finite value".into());
-    }
-    // The law's piece uses none of the five reals, a held angle only the first: the others
-    // are written as zeros and must read as zeros (one byte form per state).
-    let used = match kind {
-        0 => 0,
-        1 => 1,
-        _ => 5,
-    };
-    if r[used..].iter().any(|x| x.to_bits() != 0) {
-        return Err(format!("field `piece`: a piece of kind {kind} uses only {used} of its reals: the rest must be 0"));
-    }
-    *piece = match kind {
-        0 => PhiPiece::Turn(values.law),
-        1 => PhiPiece::Hold(r[0]),
-        2 => PhiPiece::Taylor(TaylorSignal {
-            t0: r[0],
-            at_t0: Phi { phi: r[1], dphi: r[2], ddphi: r[3] },
-            jerk: r[4],
-        }),
-        _ => return Err(format!("field `piece_kind` = {kind} is out of range: must be 0, 1 or 2")),
-    };
     Ok(())
 }
 

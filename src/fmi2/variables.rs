@@ -53,7 +53,7 @@ pub struct Capabilities {
 pub const CAPABILITIES: Capabilities = Capabilities {
     can_handle_variable_communication_step_size: true,
     can_interpolate_inputs: true,
-    max_output_derivative_order: 0,
+    max_output_derivative_order: 2,
     can_run_asynchronuously: false,
     can_be_instantiated_only_once_per_process: false,
     can_not_use_memory_management_functions: true,
@@ -122,7 +122,36 @@ pub const PHI_SOURCE_TYPE: EnumType = EnumType {
     ],
 };
 
-pub const ENUM_TYPES: &[EnumType] = &[FORMULATION_TYPE, PHI_SOURCE_TYPE];
+pub const PHI_INTERPOLATION_TYPE: EnumType = EnumType {
+    name: "PhiInterpolation",
+    description: "How the input phi is interpolated between communication points",
+    items: &[
+        (
+            "smooth",
+            "pieces joined with continuous phi, phi' and phi'' to a target extrapolated from the \
+             last values and sent derivatives; jumps of the signal restart the integrator",
+        ),
+        (
+            "taylor",
+            "FMI's polynomial phi + phi'*s + phi''*s^2/2 from the sent derivatives over each step \
+             (with values only, a cubic to the extrapolated value and slope)",
+        ),
+    ],
+};
+
+pub const RANGE_CHECK_TYPE: EnumType = EnumType {
+    name: "RangeCheck",
+    description: "What a step does when the state leaves the range of validity of the equations \
+                  (|v1| <= l, |theta1| <= pi/2, the dae formulation's drift)",
+    items: &[
+        ("stop", "the step ends there with fmi2Discard and a message"),
+        ("warn", "fmi2Warning with a message, once; the run goes on"),
+        ("off", "the run goes on; a state that is not a number still ends the step"),
+    ],
+};
+
+pub const ENUM_TYPES: &[EnumType] =
+    &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE];
 
 /// `<LogCategories>`: (name, description). Errors are always logged; the others only when
 /// debug logging is on for them.
@@ -211,6 +240,8 @@ pub enum Var {
     MaxOrder,
     FixedOrder,
     PhiExtrapolation,
+    PhiInterpolation,
+    RangeCheck,
     StabilityGuard,
     Phi,
     V1,
@@ -405,6 +436,23 @@ pub const VARIABLES: &[Variable] = &[
         "Degree of the polynomial through the last input values that gives phi over a step \
          when the host sends no derivatives, 0..3",
     ),
+    Variable {
+        var: Var::PhiInterpolation,
+        name: "phi_interpolation",
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        ty: Type::Enumeration { ty: &PHI_INTERPOLATION_TYPE, start: 1 },
+        description: "Interpolation of the input phi between communication points: smooth or \
+                      taylor",
+    },
+    Variable {
+        var: Var::RangeCheck,
+        name: "range_check",
+        causality: Causality::Parameter,
+        variability: Variability::Fixed,
+        ty: Type::Enumeration { ty: &RANGE_CHECK_TYPE, start: 1 },
+        description: "Outside the range of validity (|theta1| <= pi/2, ...): stop, warn or off",
+    },
     Variable {
         var: Var::StabilityGuard,
         name: "stability_guard",

@@ -58,3 +58,48 @@ impl FromStr for Formulation {
         }
     }
 }
+
+/// What a run does when the state leaves the region where the equations hold (|v1| ≤ l,
+/// |ϑ1| ≤ π/2, and the dae formulation's drift; [`check_deflection`](super::systems)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RangeCheck {
+    /// Stop the run there with a message (the default).
+    #[default]
+    Stop,
+    /// Say so once, then go on.
+    Warn,
+    /// Go on without a word. A state that is not a number still stops the run.
+    Off,
+}
+
+impl RangeCheck {
+    pub const ALL: [RangeCheck; 3] = [RangeCheck::Stop, RangeCheck::Warn, RangeCheck::Off];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RangeCheck::Stop => "stop",
+            RangeCheck::Warn => "warn",
+            RangeCheck::Off => "off",
+        }
+    }
+}
+
+impl FromStr for RangeCheck {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        by_name(&RangeCheck::ALL, RangeCheck::name, "range_check", s)
+    }
+}
+
+/// The item of `all` whose `name` is `text`; the error names the setting `key` and every item.
+pub(crate) fn by_name<T: Copy>(
+    all: &[T],
+    name: fn(T) -> &'static str,
+    key: &str,
+    text: &str,
+) -> Result<T, String> {
+    all.iter().copied().find(|item| name(*item) == text).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|item| name(*item)).collect();
+        format!("`{key}` = {text}: must be one of {}", names.join(", "))
+    })
+}

@@ -8,11 +8,13 @@ mod formulation;
 mod kinematics;
 mod params;
 mod phi;
+mod signal;
 mod systems;
 
 pub use dynamics::{BeamBody, Modes, Reactions};
-pub use formulation::Formulation;
+pub use formulation::{Formulation, RangeCheck};
 pub use kinematics::{pq, u1, u1_accel_bias};
 pub use params::{ParamError, Params};
-pub use phi::{PaperLaw, Phi, PhiPiece, TaylorSignal, ValueHistory};
-pub use systems::{DaeSystem, Outputs, TwoDofSystem};
+pub use phi::{PaperLaw, Phi, PhiPiece, Poly};
+pub use signal::{HostSignal, Interpolation, Sample, SignalError, HISTORY};
+pub use systems::{DaeSystem, Kinematics, Outputs, TwoDofSystem};

@@ -26,6 +26,14 @@ pub fn check_deflection(l: f64, v1: f64, theta1: f64) -> Result<(), RangeViolati
     Ok(())
 }
 
+/// With the range check off: only that the coordinates are numbers.
+fn check_numbers(values: &[(&'static str, f64)]) -> Result<(), RangeViolation> {
+    match values.iter().find(|(_, x)| x.is_nan()) {
+        Some(&(name, value)) => Err(RangeViolation { name, value, allowed: "a number" }),
+        None => Ok(()),
+    }
+}
+
 /// The unprojected DAE (eq. (20)+(21) with the constraint differentiated twice) satisfies
 /// u2 = u1(v1, ϑ1) only up to a drift that grows with time, quadratically once the drive
 /// has stopped: 3e-4 m at 10 s, 0.63 m at 500 s and 199 m at 10⁴ s on the paper's scene at
@@ -41,6 +49,59 @@ pub fn check_drift(l: f64, drift: f64) -> Result<(), RangeViolation> {
         });
     }
     Ok(())
+}
+
+/// The motion at one instant (SI units): coordinates, rates and accelerations, and φ. The
+/// cheap part of the outputs: the reactions and the energy follow from it
+/// ([`reactions`](Self::reactions), [`energy`](Self::energy)) when asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Kinematics {
+    pub t: f64,
+    /// Tip deflection [m], tip section rotation [rad], body's axial hinge displacement [m].
+    pub v1: f64,
+    pub theta1: f64,
+    pub u2: f64,
+    /// Their rates [m/s, rad/s, m/s].
+    pub dv1: f64,
+    pub dtheta1: f64,
+    pub du2: f64,
+    /// Their accelerations [m/s², rad/s², m/s²].
+    pub ddv1: f64,
+    pub ddtheta1: f64,
+    pub ddu2: f64,
+    pub phi: Phi,
+    /// Constraint residual u2 − u1(v1, ϑ1) [m]: identically 0 where u2 is computed from (21).
+    pub drift: f64,
+}
+
+impl Kinematics {
+    /// The hinge reactions (eq. 19).
+    pub fn reactions(&self, model: &BeamBody) -> Reactions {
+        model.reactions(&self.phi, self.theta1, self.dtheta1, self.ddtheta1, self.ddv1, self.ddu2)
+    }
+
+    /// The total mechanical energy [J].
+    pub fn energy(&self, model: &BeamBody) -> f64 {
+        let (q, qd) = (Vector2::new(self.v1, self.theta1), Vector2::new(self.dv1, self.dtheta1));
+        model.energy(&self.phi, q, qd, self.u2, self.du2)
+    }
+
+    /// Everything, the reactions and the energy included.
+    pub fn outputs(&self, model: &BeamBody) -> Outputs {
+        Outputs {
+            t: self.t,
+            v1: self.v1,
+            theta1: self.theta1,
+            u2: self.u2,
+            dv1: self.dv1,
+            dtheta1: self.dtheta1,
+            du2: self.du2,
+            phi: self.phi,
+            reactions: self.reactions(model),
+            energy: self.energy(model),
+            drift: self.drift,
+        }
+    }
 }
 
 /// Everything reported at one instant (SI units).
@@ -97,6 +158,9 @@ pub struct TwoDofSystem<'a> {
     pub model: &'a BeamBody,
     pub phi: PhiPiece,
     pub linear: bool,
+    /// Whether [`check_range`](OdeSystem::check_range) checks the range of validity; a
+    /// state that is not a number is refused either way.
+    pub range_check: bool,
 }
 
 impl TwoDofSystem<'_> {
@@ -106,28 +170,30 @@ impl TwoDofSystem<'_> {
 
     /// The outputs at (t, y): u2 from (21), reactions from (19) with the hinge's axial
     /// acceleration ü1 = −p v̈1 − l q ϑ̈1 − w.
-    pub fn outputs(&self, t: f64, y: &Vector4<f64>) -> Outputs {
+    pub fn kinematics(&self, t: f64, y: &Vector4<f64>) -> Kinematics {
         let phi = self.phi.eval(t);
         let (q, qd) = Self::split(y);
         let acc = self.model.two_dof_accel(self.linear, &phi, q, qd);
         let l = self.model.params.l;
         let (p, qq) = pq(l, q[0], q[1]);
-        let u2 = u1(l, q[0], q[1]);
-        let du2 = -p * qd[0] - l * qq * qd[1];
-        let ddu = -p * acc[0] - l * qq * acc[1] - u1_accel_bias(l, qd[0], qd[1]);
-        Outputs {
+        Kinematics {
             t,
             v1: q[0],
             theta1: q[1],
-            u2,
+            u2: u1(l, q[0], q[1]),
             dv1: qd[0],
             dtheta1: qd[1],
-            du2,
+            du2: -p * qd[0] - l * qq * qd[1],
+            ddv1: acc[0],
+            ddtheta1: acc[1],
+            ddu2: -p * acc[0] - l * qq * acc[1] - u1_accel_bias(l, qd[0], qd[1]),
             phi,
-            reactions: self.model.reactions(&phi, q[1], qd[1], acc[1], acc[0], ddu),
-            energy: self.model.energy(&phi, q, qd, u2, du2),
             drift: 0.0,
         }
+    }
+
+    pub fn outputs(&self, t: f64, y: &Vector4<f64>) -> Outputs {
+        self.kinematics(t, y).outputs(self.model)
     }
 }
 
@@ -139,6 +205,9 @@ impl OdeSystem<4> for TwoDofSystem<'_> {
     }
 
     fn check_range(&self, _t: f64, y: &Vector4<f64>) -> Result<(), RangeViolation> {
+        if !self.range_check {
+            return check_numbers(&[("v1", y[0]), ("theta1", y[1])]);
+        }
         check_deflection(self.model.params.l, y[0], y[1])
     }
 }
@@ -150,6 +219,8 @@ pub struct DaeSystem<'a> {
     pub model: &'a BeamBody,
     pub phi: PhiPiece,
     pub stabilized: bool,
+    /// As [`TwoDofSystem::range_check`].
+    pub range_check: bool,
 }
 
 impl DaeSystem<'_> {
@@ -169,13 +240,12 @@ impl DaeSystem<'_> {
 
     /// The outputs at (t, y), reactions from (19) with ẍ_h = ü2; projected first when
     /// stabilised, so the dense output is consistent too.
-    pub fn outputs(&self, t: f64, y: &Vector6<f64>) -> Outputs {
+    pub fn kinematics(&self, t: f64, y: &Vector6<f64>) -> Kinematics {
         let y = if self.stabilized { self.consistent(y) } else { *y };
         let phi = self.phi.eval(t);
         let (x, xd) = Self::split(&y);
         let acc = self.model.dae_accel(&phi, x, xd);
-        let (q, qd) = (Vector2::new(x[0], x[1]), Vector2::new(xd[0], xd[1]));
-        Outputs {
+        Kinematics {
             t,
             v1: x[0],
             theta1: x[1],
@@ -183,11 +253,16 @@ impl DaeSystem<'_> {
             dv1: xd[0],
             dtheta1: xd[1],
             du2: xd[2],
+            ddv1: acc[0],
+            ddtheta1: acc[1],
+            ddu2: acc[2],
             phi,
-            reactions: self.model.reactions(&phi, x[1], xd[1], acc[1], acc[0], acc[2]),
-            energy: self.model.energy(&phi, q, qd, x[2], xd[2]),
             drift: x[2] - u1(self.model.params.l, x[0], x[1]),
         }
+    }
+
+    pub fn outputs(&self, t: f64, y: &Vector6<f64>) -> Outputs {
+        self.kinematics(t, y).outputs(self.model)
     }
 }
 
@@ -203,6 +278,9 @@ impl OdeSystem<6> for DaeSystem<'_> {
     }
 
     fn check_range(&self, _t: f64, y: &Vector6<f64>) -> Result<(), RangeViolation> {
+        if !self.range_check {
+            return check_numbers(&[("v1", y[0]), ("theta1", y[1]), ("u2", y[2])]);
+        }
         let l = self.model.params.l;
         check_deflection(l, y[0], y[1])?;
         if !self.stabilized {

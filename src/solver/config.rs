@@ -1,5 +1,4 @@
 use super::error::SolverError;
-use nalgebra::SVector;
 
 /// The paper's mode: constant step `h` and a fixed order (reached by raising the order one
 /// step at a time from 1, at the same step size).
@@ -11,14 +10,15 @@ pub struct FixedStep {
     pub order: usize,
 }
 
-/// Solver settings. Every field has a documented default (see [`BdfConfig::new`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct BdfConfig<const N: usize> {
-    /// Relative tolerance, in [1e-14, 1]. Default 1e-6.
+/// Integrator settings: the one settings type of a run, with every default (the CLI's scene,
+/// the FMU's parameters and the benchmark fill it in).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BdfConfig {
+    /// Relative tolerance, in [1e-14, 1] ([`check_rtol`]). Default 1e-6.
     pub rtol: f64,
-    /// Absolute tolerance per component, each > 0 (a zero would divide by |y| = 0).
-    /// Default `1e-3 · rtol` for every component.
-    pub atol: SVector<f64, N>,
+    /// Absolute tolerance for every state, > 0 (a zero would divide by |y| = 0). Default
+    /// `None`: 1e-3·rtol.
+    pub atol: Option<f64>,
     /// Highest order used, 1..=5. Default 5.
     pub max_order: usize,
     /// First step size; `None` estimates it from f and an f-difference. Default `None`.
@@ -27,21 +27,21 @@ pub struct BdfConfig<const N: usize> {
     pub h_min: f64,
     /// Largest step size allowed, > 0. Default +∞.
     pub h_max: f64,
-    /// Most internal steps in one call of [`Bdf::advance`](super::Bdf::advance). Default 10⁷.
+    /// Most internal steps in one call of [`Bdf::advance`](super::Bdf::advance) (one output
+    /// interval, one FMI communication step), ≥ 1. Default 10⁷.
     pub max_steps: u64,
     /// Cap the order so that no weakly damped mode of the Jacobian sits in the unstable band
     /// of BDF3–5 (see `guard.rs`). Default `true`.
     pub stability_guard: bool,
-    /// Constant step and order instead of error control. Default `None`.
+    /// Constant step and order instead of error control (the paper's mode). Default `None`.
     pub fixed_step: Option<FixedStep>,
 }
 
-impl<const N: usize> BdfConfig<N> {
-    /// Defaults with the given relative tolerance and `atol = 1e-3·rtol`.
-    pub fn new(rtol: f64) -> Self {
+impl Default for BdfConfig {
+    fn default() -> Self {
         Self {
-            rtol,
-            atol: SVector::from_element(1e-3 * rtol),
+            rtol: 1e-6,
+            atol: None,
             max_order: 5,
             h_init: None,
             h_min: 0.0,
@@ -51,17 +51,40 @@ impl<const N: usize> BdfConfig<N> {
             fixed_step: None,
         }
     }
+}
+
+/// The allowed relative tolerances, [1e-14, 1]: the one check of the range, for the solver,
+/// the CLI and the FMU. The error is the allowed range, for "… must be {error}".
+pub fn check_rtol(rtol: f64) -> Result<(), &'static str> {
+    if rtol.is_finite() && (1e-14..=1.0).contains(&rtol) {
+        Ok(())
+    } else {
+        Err("in [1e-14, 1]")
+    }
+}
+
+impl BdfConfig {
+    /// The defaults with relative tolerance `rtol`.
+    pub fn new(rtol: f64) -> Self {
+        Self { rtol, ..Self::default() }
+    }
+
+    /// The absolute tolerance in use: `atol`, or 1e-3·rtol.
+    pub fn atol(&self) -> f64 {
+        self.atol.unwrap_or(1e-3 * self.rtol)
+    }
 
     /// Checks every field against its allowed range.
     pub fn validate(&self) -> Result<(), SolverError> {
         let bad = |field: &'static str, value: f64, allowed: &'static str| {
             Err(SolverError::InvalidConfig { field, value, allowed })
         };
-        if !(self.rtol.is_finite() && (1e-14..=1.0).contains(&self.rtol)) {
-            return bad("rtol", self.rtol, "a number in [1e-14, 1]");
+        if let Err(allowed) = check_rtol(self.rtol) {
+            return bad("rtol", self.rtol, allowed);
         }
-        if let Some(a) = self.atol.iter().find(|a| !(a.is_finite() && **a > 0.0)) {
-            return bad("atol", *a, "positive and finite");
+        let atol = self.atol();
+        if !(atol.is_finite() && atol > 0.0) {
+            return bad("atol", atol, "positive and finite");
         }
         if !(1..=5).contains(&self.max_order) {
             return bad("max_order", self.max_order as f64, "an integer in 1..=5");

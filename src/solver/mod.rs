@@ -17,9 +17,10 @@ mod stats;
 mod system;
 
 pub use bdf::{Bdf, StepOutcome};
-pub use config::{BdfConfig, FixedStep};
+pub use config::{check_rtol, BdfConfig, FixedStep};
 pub use error::SolverError;
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
+pub(crate) use snapshot::visit_usize;
 pub use snapshot::StateVisitor;
 pub use stats::Stats;
 pub use system::{OdeSystem, RangeViolation};

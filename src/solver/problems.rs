@@ -72,7 +72,7 @@ impl SlowAndFast {
     /// on every component, and the guard on or off.
     pub fn run(&self, rtol: f64, guard: bool, t_end: f64) -> Result<SlowAndFastRun, SolverError> {
         let mut cfg = BdfConfig::new(rtol);
-        cfg.atol = SVector::repeat(1e-6);
+        cfg.atol = Some(1e-6);
         cfg.stability_guard = guard;
         let mut s = Bdf::new(cfg, 0.0, self.initial())?;
         let mut amp: f64 = 0.0;

@@ -24,6 +24,7 @@
  * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB]
  *                     [--save-state S STATE.bin] [--resume STATE.bin]
  *                     [--no-dlclose | --reloads R]
+ *        host UNZIPDIR --bench-dostep ROUNDS [--feed FEED]
  * --so loads another build of the library (with the unzipped FMU's modelDescription.xml);
  * --cycles 0 and --threads 0 skip checks 2 and 3.
  * --save-state S FILE: in the scene (check 1), after communication step S (t = S*h, once its
@@ -36,6 +37,8 @@
  * each other and with checks 2 and 3.
  * --no-dlclose keeps the library loaded at exit; --reloads R then loads, uses (one plain and one
  * FMU-state cycle) and unloads it R more times.
+ * --bench-dostep ROUNDS replaces the checks by the benchmark of fmi2DoStep (section 4, run by
+ * `cargo xtask bench`); --feed FEED runs one way of sending phi only (for a profiler).
  * Exit code: 0 when every check passed, 1 on a failure (with a message on stderr), 2 on bad usage.
  *
  * What differs between POSIX and Windows (loading the library and its error text, threads and
@@ -333,6 +336,8 @@ typedef fmi2Status fmi2SerializeFMUstateTYPE(fmi2Component, fmi2FMUstate, fmi2By
 typedef fmi2Status fmi2DeSerializeFMUstateTYPE(fmi2Component, const fmi2Byte[], size_t,
                                                fmi2FMUstate *);
 typedef fmi2Status fmi2DoStepTYPE(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
+typedef fmi2Status fmi2SetRealInputDerivativesTYPE(fmi2Component, const fmi2ValueReference[],
+                                                   size_t, const fmi2Integer[], const fmi2Real[]);
 typedef fmi2Status fmi2GetRealStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Real *);
 typedef fmi2Status fmi2GetBooleanStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Boolean *);
 
@@ -374,6 +379,7 @@ typedef struct {
     fmi2SerializeFMUstateTYPE *SerializeFMUstate;
     fmi2DeSerializeFMUstateTYPE *DeSerializeFMUstate;
     fmi2DoStepTYPE *DoStep;
+    fmi2SetRealInputDerivativesTYPE *SetRealInputDerivatives;
     fmi2GetRealStatusTYPE *GetRealStatus;
     fmi2GetBooleanStatusTYPE *GetBooleanStatus;
 } Api;
@@ -383,6 +389,7 @@ typedef struct {
 typedef struct {
     char guid[128];
     fmi2ValueReference ei, phi_end, phi_source, v1, theta1, u2;
+    fmi2ValueReference phi, fixed_step, phi_interpolation; /* for --bench-dostep */
 } Model;
 
 #define PHI_SOURCE_LAW 2 /* enumeration PhiSource: 1 = input (the start value), 2 = law */
@@ -570,7 +577,9 @@ static int read_model(const char *unzipdir, Model *m, Err *err) {
     m->guid[end - g - 7] = '\0';
     if (find_vr(xml, "EI", &m->ei, err) || find_vr(xml, "phi_end", &m->phi_end, err) ||
         find_vr(xml, "phi_source", &m->phi_source, err) || find_vr(xml, "v1", &m->v1, err) ||
-        find_vr(xml, "theta1", &m->theta1, err) || find_vr(xml, "u2", &m->u2, err))
+        find_vr(xml, "theta1", &m->theta1, err) || find_vr(xml, "u2", &m->u2, err) ||
+        find_vr(xml, "phi", &m->phi, err) || find_vr(xml, "fixed_step", &m->fixed_step, err) ||
+        find_vr(xml, "phi_interpolation", &m->phi_interpolation, err))
         goto out;
     rc = 0;
 out:
@@ -604,6 +613,7 @@ static int load_api(Lib lib, Api *api, Err *err) {
     SYM(SerializeFMUstate, "fmi2SerializeFMUstate");
     SYM(DeSerializeFMUstate, "fmi2DeSerializeFMUstate");
     SYM(DoStep, "fmi2DoStep");
+    SYM(SetRealInputDerivatives, "fmi2SetRealInputDerivatives");
     SYM(GetRealStatus, "fmi2GetRealStatus");
     SYM(GetBooleanStatus, "fmi2GetBooleanStatus");
 #undef SYM
@@ -1150,12 +1160,114 @@ static int unload(Lib lib, const char *path, Err *err) {
     return 0;
 }
 
+/* ----- 4: the cost of one fmi2DoStep (--bench-dostep) ---------------------------------------- */
+
+/* How phi arrives: the fixed-step floor (BDF2 with h = the communication step and phi from the
+ * built-in law: one internal step per communication step), the built-in law with the adaptive BDF,
+ * and the input sent as values, as values with phi' and phi'' (smooth interpolation), and as values
+ * with derivatives under phi_interpolation = taylor. */
+enum { FEED_FLOOR, FEED_LAW, FEED_VALUES, FEED_DERIVATIVES, FEED_TAYLOR, N_FEEDS };
+static const char *const FEEDS[N_FEEDS] = {"floor", "law", "values", "derivatives", "taylor"};
+static const double BENCH_H[] = {1e-2, 1e-3, 1e-4};
+#define N_BENCH_H (sizeof BENCH_H / sizeof BENCH_H[0])
+
+/* The paper's law (phi_end = pi, t_rot = 0.85 s), as a host would send it. */
+static void paper_law(double t, double out[3]) {
+    const double t_rot = 0.85, w = PI / t_rot;
+    if (t >= t_rot) {
+        out[0] = PI, out[1] = 0.0, out[2] = 0.0;
+        return;
+    }
+    out[0] = 0.5 * PI * (1.0 - cos(w * t));
+    out[1] = 0.5 * PI * w * sin(w * t);
+    out[2] = 0.5 * PI * w * w * cos(w * t);
+}
+
+/* One run of the paper's scene at communication step hc, rtol 1e-6: the seconds of the DoStep
+ * loop (with the inputs it sets), from the first fmi2DoStep to the last. */
+static int bench_case(const Host *h, int feed, double hc, double *seconds, int *steps, Err *err) {
+    const Api *f = h->api;
+    const Model *m = h->model;
+    const char *who = FEEDS[feed];
+    LogCtx ctx, *lc = &ctx;
+    fmi2CallbackFunctions cb;
+    ctx_init(&ctx, who);
+    fmi2Component c = instantiate(h, &ctx, &cb, m->guid, fmi2CoSimulation, fmi2False);
+    if (!c) return fail(err, "%s: fmi2Instantiate returned NULL (%s)", who, ctx.last);
+    int rc = -1;
+    double *p = NULL;
+    const int n = (int)lround(T_END / hc);
+    const fmi2Integer law = PHI_SOURCE_LAW, taylor = 2;
+    const int input = feed >= FEED_VALUES, derivatives = feed >= FEED_DERIVATIVES;
+    OK(f->SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2True, T_END));
+    if (!input) OK(f->SetInteger(c, &m->phi_source, 1, &law));
+    if (feed == FEED_FLOOR) OK(f->SetReal(c, &m->fixed_step, 1, &hc));
+    if (feed == FEED_TAYLOR) OK(f->SetInteger(c, &m->phi_interpolation, 1, &taylor));
+    OK(f->EnterInitializationMode(c));
+    OK(f->ExitInitializationMode(c));
+    const fmi2ValueReference two[2] = {m->phi, m->phi};
+    const fmi2Integer orders[2] = {1, 2};
+    /* The host's signal is computed before the clock starts: the loop times the FMU's calls. */
+    if (input && !(p = malloc(sizeof(double) * 3 * (size_t)n))) {
+        fail(err, "%s: out of memory", who);
+        goto out;
+    }
+    for (int k = 0; input && k < n; k++) paper_law(k * hc, p + 3 * k);
+    double t0 = now();
+    for (int k = 0; k < n; k++) {
+        double tc = k * hc;
+        if (input) {
+            OK(f->SetReal(c, &m->phi, 1, p + 3 * k));
+            if (derivatives) OK(f->SetRealInputDerivatives(c, two, 2, orders, p + 3 * k + 1));
+        }
+        OK(f->DoStep(c, tc, hc, fmi2True));
+    }
+    *seconds = now() - t0;
+    *steps = n;
+    OK(f->Terminate(c));
+    rc = 0;
+out:
+    free(p);
+    f->FreeInstance(c);
+    return rc;
+}
+
+/* ROUNDS rounds after a warm-up round 0, each running every feed at every communication step in
+ * an order shuffled with the round as seed; one CSV row per run on stdout. */
+static int bench_dostep(const Host *h, int rounds, const char *only, Err *err) {
+    enum { N_CASES = N_FEEDS * N_BENCH_H };
+    int order[N_CASES];
+    printf("round,feed,h,steps,seconds\n");
+    for (int r = 0; r <= rounds; r++) {
+        for (int i = 0; i < N_CASES; i++) order[i] = i;
+        uint64_t state = 0x9e3779b97f4a7c15u * (uint64_t)(r + 1);
+        for (int i = N_CASES - 1; i > 0; i--) { /* Fisher-Yates with a 64-bit LCG (Knuth's MMIX) */
+            state = state * 6364136223846793005u + 1442695040888963407u;
+            int j = (int)((state >> 33) % (uint64_t)(i + 1));
+            int tmp = order[i];
+            order[i] = order[j], order[j] = tmp;
+        }
+        for (int i = 0; i < N_CASES; i++) {
+            int feed = order[i] / (int)N_BENCH_H;
+            double hc = BENCH_H[order[i] % (int)N_BENCH_H];
+            if (only && strcmp(only, FEEDS[feed])) continue;
+            double seconds = 0.0;
+            int steps = 0;
+            if (bench_case(h, feed, hc, &seconds, &steps, err)) return -1;
+            printf("%d,%s,%g,%d,%.9f\n", r, FEEDS[feed], hc, steps, seconds);
+        }
+        fflush(stdout);
+    }
+    return 0;
+}
+
 /* ----- main --------------------------------------------------------------------------------- */
 
 static int usage(void) {
     fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB] "
                     "[--save-state S STATE.bin] [--resume STATE.bin] "
-                    "[--no-dlclose | --reloads R]\n");
+                    "[--no-dlclose | --reloads R]\n"
+                    "       host UNZIPDIR --bench-dostep ROUNDS [--feed FEED]\n");
     return 2;
 }
 
@@ -1169,7 +1281,8 @@ static void resources_uri(char *dst, size_t cap, const char *unzipdir) {
 
 int main(int argc, char **argv) {
     const char *unzipdir = NULL, *out_csv = NULL, *so = NULL;
-    int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1;
+    int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1, bench_rounds = -1;
+    const char *bench_only = NULL;
     StateIO io = {.save_step = -1};
     platform_init();
     for (int a = 1; a < argc; a++) {
@@ -1188,6 +1301,10 @@ int main(int argc, char **argv) {
             io.save_file = argv[++a];
         } else if (!strcmp(argv[a], "--resume") && a + 1 < argc)
             io.resume_file = argv[++a];
+        else if (!strcmp(argv[a], "--bench-dostep") && a + 1 < argc)
+            bench_rounds = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--feed") && a + 1 < argc)
+            bench_only = argv[++a];
         else if (!strcmp(argv[a], "--no-dlclose"))
             do_dlclose = 0;
         else if (argv[a][0] != '-' && !unzipdir)
@@ -1218,6 +1335,7 @@ int main(int argc, char **argv) {
     Api api;
     if (load_api(lib, &api, &err)) goto failed;
     Host host = {&api, &model, resources};
+    if (bench_rounds >= 0) return bench_dostep(&host, bench_rounds, bench_only, &err) ? (fprintf(stderr, "host: FAILED: %s\n", err.msg), 1) : 0;
     printf("host library=%s guid=%s\n", lib_path, model.guid);
 
     if (check_scene(&host, out_csv, &io, &err)) goto failed;

@@ -72,8 +72,15 @@ Commands:
             Rust case in one release process and every SciPy case in one Python process,
             in a shuffled order;
           - write work_precision.csv, .png and .md, and copy the figure and the table
-            to docs/.
+            to docs/;
+          - then the cost of one fmi2DoStep (bench-dostep, below).
           --quick: fewer tolerances and steps and 3 rounds (a few minutes).
+  bench-dostep [--quick]
+          The cost of one fmi2DoStep alone, the last part of `bench`: a bare C host
+          (tests/c_host/host.c) on the packaged FMU, the paper's scene at tolerance 1e-6,
+          communication steps 1e-2, 1e-3, 1e-4 s, for each way phi arrives (law, values,
+          values with derivatives, taylor) against the fixed-step BDF2 floor; 10 rounds
+          (3 with --quick); target/bench/dostep.{csv,md}, and docs/dostep.md in the full run.
   bench-run --round K
           One round of the benchmark's Rust cases (used by `bench`, in a release build
           with --features bench): run the cases of target/bench/cases.csv in an order
@@ -153,6 +160,7 @@ fn run(args: &[String]) -> Result {
         },
         "bench" => bench::run(Mode::parse(command, options)?),
         "bench-run" => bench::run_round(bench::parse_round(options)?),
+        "bench-dostep" => bench::run_dostep(Mode::parse(command, options)?),
         "sweep" => sweep::run(options),
         "sweep-case" => sweep::run_case(options),
         "fuzz" => fuzz::run(options),

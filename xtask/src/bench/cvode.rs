@@ -21,7 +21,7 @@
 //! and `SUNContext_Create`'s first argument (`void*` in 6, an `int` `SUNComm` in 7 without
 //! MPI): null either way, in the same register. [`describe`] names the library and version.
 //!
-//! As our driver does (`Run::advance_law`), a solve stops exactly on the law's breakpoint
+//! As our driver does (`Run::step_to`), a solve stops exactly on the law's breakpoint
 //! t_rot (`CVodeSetStopTime`), switches to the next piece of φ and restarts there
 //! (`CVodeReInit`, order 1, a new initial step); the second segment stops at t_end. The grid
 //! values come from `CVode` in `CV_NORMAL` mode at each grid time (CVODE's interpolation

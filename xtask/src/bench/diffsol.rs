@@ -12,7 +12,7 @@
 //! that needs the step size and ‖f‖, which the closure does not see.) All f-evaluations,
 //! those of the Jacobians included, are counted in `rhs_evals`.
 //!
-//! As our driver does (`Run::advance_law`), a solve stops on the law's breakpoint t_rot
+//! As our driver does (`Run::step_to`), a solve stops on the law's breakpoint t_rot
 //! (`set_stop_time`) and restarts there with the next piece of φ: a new problem and solver
 //! from the state reached (order 1, diffsol's own initial step). The grid values come from
 //! diffsol's interpolation inside the last step (`interpolate_inplace`).

@@ -24,6 +24,7 @@
 mod cvode;
 #[cfg(feature = "bench")]
 mod diffsol;
+mod dostep;
 pub mod fmu;
 mod ours;
 pub mod problem;
@@ -237,6 +238,24 @@ fn read_cases(path: &Path) -> Result<Vec<Case>> {
 // ---------------------------------------------------------------------------------------
 // `cargo xtask bench`.
 
+/// `cargo xtask bench-dostep`: the cost of one fmi2DoStep alone ([`dostep`]).
+pub fn run_dostep(mode: Mode) -> Result {
+    let dir = bench_dir();
+    create_dir(&dir)?;
+    let fmu_dir = fmu::prepare()?;
+    dostep_report(mode, &fmu_dir, &dir)
+}
+
+/// Runs the DoStep benchmark, prints its table and, in the full run, copies it to docs/.
+fn dostep_report(mode: Mode, fmu_dir: &Path, dir: &Path) -> Result {
+    let table = dostep::run(mode, fmu_dir, dir)?;
+    println!("\n{table}");
+    if mode == Mode::Full {
+        write_text(&project_root().join("docs").join("dostep.md"), &table)?;
+    }
+    Ok(())
+}
+
 pub fn run(mode: Mode) -> Result {
     let started = Instant::now();
     let dir = bench_dir();
@@ -351,9 +370,20 @@ pub fn run(mode: Mode) -> Result {
     let phase = Instant::now();
     if let Some(report) = script("bench_report.py") {
         let _tick = crate::progress::ticker("bench: report", String::new);
-        run_cmd(Command::new(&python).arg(relative(&report)).current_dir(&root))?;
+        let mut cmd = Command::new(&python);
+        cmd.arg(relative(&report)).current_dir(&root);
+        // Only the full run replaces the snapshot in docs/; --quick reports in target/bench.
+        if mode == Mode::Quick {
+            cmd.args(["--no-docs", "--command", "cargo xtask bench --quick"]);
+        }
+        run_cmd(&mut cmd)?;
     }
     let report_time = phase.elapsed();
+
+    // The cost of one fmi2DoStep, from a bare C host (after the rounds: nothing else runs).
+    let phase = Instant::now();
+    dostep_report(mode, &fmu_dir, &dir)?;
+    let dostep_time = phase.elapsed();
 
     println!("\nOutputs:");
     for name in ["work_precision.csv", "work_precision.png", "work_precision.md"] {
@@ -361,10 +391,14 @@ pub fn run(mode: Mode) -> Result {
         let mark = if path.exists() { "" } else { "  (missing)" };
         println!("  {}{mark}", relative(&path));
     }
-    for name in ["work_precision.png", "work_precision.md"] {
-        let path = root.join("docs").join(name);
-        let mark = if path.exists() { "" } else { "  (missing)" };
-        println!("  {}{mark}", relative(&path));
+    if mode == Mode::Full {
+        for name in ["work_precision.png", "work_precision.md"] {
+            let path = root.join("docs").join(name);
+            let mark = if path.exists() { "" } else { "  (missing)" };
+            println!("  {}{mark}", relative(&path));
+        }
+    } else {
+        println!("  (docs/ keeps the snapshot of the last full run)");
     }
     println!(
         "  raw data: {}, {}, sol/, ref/",
@@ -373,14 +407,15 @@ pub fn run(mode: Mode) -> Result {
     );
     let secs = Duration::as_secs_f64;
     println!(
-        "\nTime: setup {:.1} s, reference {:.1} s, rounds {:.1} s ({} + warm-up), report {:.1} s; \
-         benchmark (reference excluded) {:.1} s, total {:.1} s",
+        "\nTime: setup {:.1} s, reference {:.1} s, rounds {:.1} s ({} + warm-up), report {:.1} s, \
+         DoStep costs {:.1} s; benchmark (reference excluded) {:.1} s, total {:.1} s",
         secs(&setup),
         secs(&reference_time),
         secs(&rounds_time),
         rounds,
         secs(&report_time),
-        secs(&(rounds_time + report_time)),
+        secs(&dostep_time),
+        secs(&(rounds_time + report_time + dostep_time)),
         secs(&started.elapsed()),
     );
     Ok(())
@@ -698,6 +733,7 @@ fn write_costs(path: &Path, scenes: &[&str]) -> Result {
                     model: &model,
                     phi: piece,
                     linear: s.formulation == Formulation::Linear,
+                    range_check: true,
                 };
                 costs(&sys, t, SVector::<f64, 4>::new(0.01, 0.004, 0.05, 0.02))
             }
@@ -706,6 +742,7 @@ fn write_costs(path: &Path, scenes: &[&str]) -> Result {
                     model: &model,
                     phi: piece,
                     stabilized: s.formulation == Formulation::DaeStabilized,
+                    range_check: true,
                 };
                 let y = SVector::<f64, 6>::from([0.01, 0.004, 0.0, 0.05, 0.02, 0.0]);
                 costs(&sys, t, sys.consistent(&y))

@@ -42,17 +42,17 @@ pub fn bdf_fixed(problem: &Problem, h: f64) -> Result<Outcome, String> {
 /// `simulate` would also compute accelerations, reactions and energy at every grid point.
 fn solve(problem: &Problem, scene: &Scene) -> Result<Outcome, String> {
     let model = scene.validate().map_err(|err| err.to_string())?;
-    let law = scene.law;
-    let start = law.piece_from(0.0);
-    let mut run = Run::new(model, scene.formulation, &scene.solver, 0.0, scene.initial, start)
+    let (law, init) = (scene.law, scene.initial);
+    let mut run = Run::with_law(model, scene.formulation, &scene.solver, 0.0, init, law)
         .map_err(|err| err.to_string())?;
     let mut states = Vec::with_capacity(problem.grid.len());
     let mut y = [0.0; 6];
-    for &t in &problem.grid {
-        run.advance_law(&law, t, scene.t_end).map_err(|err| err.to_string())?;
-        let n = run.state_at(t, &mut y).map_err(|err| err.to_string())?;
+    run.step_to_sampling(scene.t_end, problem.grid.iter().copied(), |run, t| {
+        let n = run.state_at(t, &mut y)?;
         states.push(y[..n].to_vec());
-    }
+        Ok(())
+    })
+    .map_err(|err| err.to_string())?;
     Ok(Outcome { states, counters: counters(&run.stats()) })
 }
 

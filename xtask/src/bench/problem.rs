@@ -34,18 +34,18 @@ pub trait WithSystem {
 
 /// Calls `w` with the scene's formulation as a system of 4 (reduced, linear) or 6 (dae,
 /// dae-stabilized) states and its initial state, the DAE's u2 and u̇2 made consistent with
-/// the constraint as `Run::new` starts them.
+/// the constraint as `Run` starts them.
 pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::Output {
     let init = scene.initial;
     match scene.formulation {
         Formulation::Reduced | Formulation::Linear => {
             let linear = scene.formulation == Formulation::Linear;
             let y0 = Vector4::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            w.apply(|phi| TwoDofSystem { model, phi, linear }, y0)
+            w.apply(|phi| TwoDofSystem { model, phi, linear, range_check: true }, y0)
         }
         Formulation::Dae | Formulation::DaeStabilized => {
             let stabilized = scene.formulation == Formulation::DaeStabilized;
-            let system = |phi| DaeSystem { model, phi, stabilized };
+            let system = |phi| DaeSystem { model, phi, stabilized, range_check: true };
             let free = Vector6::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
             let y0 = system(scene.law.piece_from(0.0)).consistent(&free);
             w.apply(system, y0)

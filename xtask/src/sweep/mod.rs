@@ -463,9 +463,9 @@ fn measure(case: &Case) -> Row {
         _ => f64::NAN,
     };
     match result {
-        Ok(stats) => {
-            row.steps = stats.steps;
-            row.rejected = stats.rejected();
+        Ok(report) => {
+            row.steps = report.stats.steps;
+            row.rejected = report.stats.rejected();
         }
         Err(e) => {
             if let SimError::Solver(SolverError::OutOfRange { t, name, .. }) = e {
