@@ -275,6 +275,30 @@ impl StateVisitor for Writer {
     }
 }
 
+/// Where each field of `core`'s serialized bytes starts, in the order written: (name, offset
+/// from the first byte of the state). The writer's own encoding gives the offsets.
+#[cfg(test)]
+pub(super) fn field_offsets(core: &Core) -> Vec<(&'static str, usize)> {
+    struct Offsets(Writer, Vec<(&'static str, usize)>);
+    impl StateVisitor for Offsets {
+        fn real(&mut self, name: &'static str, x: &mut f64) {
+            self.1.push((name, HEADER + self.0 .0.len()));
+            self.0.real(name, x);
+        }
+        fn count(&mut self, name: &'static str, x: &mut u64) {
+            self.1.push((name, HEADER + self.0 .0.len()));
+            self.0.count(name, x);
+        }
+        fn flag(&mut self, name: &'static str, x: &mut bool) {
+            self.1.push((name, HEADER + self.0 .0.len()));
+            self.0.flag(name, x);
+        }
+    }
+    let mut offsets = Offsets(Writer(Vec::new()), Vec::new());
+    visit_core(&mut core.clone(), &mut offsets).expect("a valid snapshot writes without error");
+    offsets.1
+}
+
 /// Reads fields in order; the first short read or bad flag is kept in `error`, and every
 /// later read yields zero, so the visit completes and the caller reports the error.
 struct Reader<'a> {
