@@ -73,6 +73,12 @@ fn step_ratio(bias: f64, err: f64, exponent: usize) -> f64 {
     1.0 / (root(bias * err, exponent) + ADDON)
 }
 
+/// Whether the step ratio of [`step_ratio`] for `bias_err` = bias·err and `exponent` is at
+/// least `eta` (> 1), without the root: bias·err ≤ (1/eta − ADDON)^exponent.
+fn ratio_at_least(bias_err: f64, exponent: usize, eta: f64) -> bool {
+    bias_err <= math::powi(1.0 / eta - ADDON, exponent as i32)
+}
+
 /// Whether a^(1/k) < b^(1/l) for (a, k) and (b, l), a and b ≥ 0 or infinite: as
 /// a^l < b^k, two integer powers, where these cannot overflow or underflow (a and b 0,
 /// infinite or within 1e±40, and k, l ≤ 7), else as log(a)/k < log(b)/l. The two agree but
@@ -1048,8 +1054,7 @@ impl<const N: usize> Bdf<N> {
     /// this saves a powf in most steps.
     fn eta_same_order(&self, dsm: f64) -> f64 {
         let q = self.q;
-        let grows = BIAS_SAME * dsm <= math::powi(1.0 / ETA_THRESHOLD - ADDON, q as i32 + 1);
-        if !grows {
+        if !ratio_at_least(BIAS_SAME * dsm, q + 1, ETA_THRESHOLD) {
             1.0
         } else if self.capped(BIAS_SAME * dsm, q + 1) {
             self.eta_max
@@ -1066,8 +1071,7 @@ impl<const N: usize> Bdf<N> {
     /// This is the common case of a step held short by the landing on a communication point,
     /// where the estimate would allow far more.
     fn capped(&self, bias_err: f64, k: usize) -> bool {
-        let r = 1.0 / self.eta_max - ADDON;
-        self.eta_max >= ETA_THRESHOLD && bias_err <= 0.5 * math::powi(r, k as i32)
+        self.eta_max >= ETA_THRESHOLD && ratio_at_least(2.0 * bias_err, k, self.eta_max)
     }
 
     /// The order among q − 1, q, q + 1 that allows the largest step, and that step's ratio
