@@ -6,10 +6,9 @@
 //! communication step and φ from the built-in law, through the same FMI calls. Each other way
 //! is timed with what it needs per step: fmi2SetReal of φ, and fmi2SetRealInputDerivatives of
 //! φ′ and φ″ for the derivatives; the host's signal is computed before the clock starts. The
-//! host runs every case once per round, in an order
-//! shuffled with the round as seed, a warm-up round 0 first; the figure per case is the median
-//! over the timed rounds of (loop time / communication steps), and its ratio to the floor's
-//! median at the same step. The real-time factor is the simulated 10.2 s over the loop time.
+//! host runs every case once per round, in an order shuffled with the round as seed, a warm-up
+//! round 0 first; the figure per case is the median over the timed rounds of (loop time /
+//! communication steps), and its ratio to the floor's median at the same step. The real-time factor is the simulated 10.2 s over the loop time.
 //!
 //! Files: `target/bench/dostep.csv` (the host's rows) and `target/bench/dostep.md`, copied to
 //! `docs/dostep.md` by the full run.
