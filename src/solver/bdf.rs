@@ -138,6 +138,9 @@ pub enum StepOutcome {
     Stepped,
     /// The step landed exactly on the stop time.
     ReachedStop,
+    /// Only from [`Bdf::probe_step`]: the first attempt failed its error test, and the
+    /// solver is back at t_n.
+    Rejected,
 }
 
 /// Why the last Newton attempt failed, which decides what the next setup refreshes.
@@ -372,26 +375,6 @@ impl<const N: usize> Bdf<N> {
         (self.q_next, self.h_next)
     }
 
-    /// How much a change of the right-hand side at the current point would matter to the
-    /// next step: ‖h·(f_after − f)‖ in the error test's weighted RMS norm, with h the step
-    /// planned next and f the derivative the history holds there (z₁/h, f of the last step's
-    /// converged corrector). Above about 1 the change alone would fail the error test, and
-    /// the history would carry it into the steps after; below, the step absorbs it. One
-    /// evaluation of f. Infinite before the first step (there is no history to keep).
-    pub fn change_of_rhs<B: OdeSystem<N>>(&mut self, after: &B) -> f64 {
-        if !self.started || self.hscale == 0.0 {
-            return f64::INFINITY;
-        }
-        let (t, y) = (self.t, self.zn[0]);
-        let df = self.eval_rhs(after, t, &y) - self.zn[1] / self.hscale;
-        let norm = self.wrms(&(df * self.h_next.abs()));
-        if norm.is_nan() {
-            f64::INFINITY
-        } else {
-            norm
-        }
-    }
-
     /// The state at `t` inside the last step `[t_n − h_u, t_n]`, from the Nordsieck
     /// polynomial (dense output, CVODE's CVodeGetDky with k = 0).
     pub fn interpolate(&self, t: f64) -> Result<SVector<f64, N>, SolverError> {
@@ -447,6 +430,29 @@ impl<const N: usize> Bdf<N> {
         sys: &S,
         tstop: f64,
     ) -> Result<StepOutcome, SolverError> {
+        self.attempt_step(sys, tstop, false)
+    }
+
+    /// One step after the right-hand side changed at t_n by an amount nobody weighed (a
+    /// jump of an input's second derivative, say): the history is kept, and the step's first
+    /// attempt tells whether it survived the change. If that attempt fails its error test,
+    /// the change did not fit in the history: the solver is left at t_n (y_n unchanged, the
+    /// failure counted) and returns [`StepOutcome::Rejected`], for the caller to
+    /// [`reinit`](Self::reinit) it there. Otherwise as [`step`](Self::step).
+    pub fn probe_step<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        tstop: f64,
+    ) -> Result<StepOutcome, SolverError> {
+        self.attempt_step(sys, tstop, true)
+    }
+
+    fn attempt_step<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        tstop: f64,
+        probe: bool,
+    ) -> Result<StepOutcome, SolverError> {
         if tstop <= self.t {
             return Err(SolverError::TimeBehind { t: self.t, target: tstop });
         }
@@ -473,6 +479,11 @@ impl<const N: usize> Bdf<N> {
                 break dsm;
             }
             self.restore(t_prior);
+            if probe && failures.error_test == 0 {
+                self.stats.error_test_failures += 1;
+                self.landing = None;
+                return Ok(StepOutcome::Rejected);
+            }
             self.handle_error_test_failure(sys, dsm, &mut failures)?;
             conv_fail = ConvFail::ErrorTest;
         };
@@ -1223,6 +1234,37 @@ mod tests {
         assert!(worst < 1e-8, "dense output error {worst}");
         assert!(s.stats().steps < 200, "steps {}", s.stats().steps);
         assert!(s.interpolate(s.t() + 1.0).is_err());
+    }
+
+    /// y' = −y + c: a forcing that the caller changes between steps.
+    struct Forced(f64);
+    impl OdeSystem<1> for Forced {
+        fn rhs(&self, _t: f64, y: &Vector1<f64>) -> Vector1<f64> {
+            Vector1::new(self.0 - y[0])
+        }
+    }
+
+    #[test]
+    fn probe_step_keeps_a_history_that_survives_a_change_and_rejects_one_that_does_not() {
+        let mut s = Bdf::new(BdfConfig::new(1e-8), 0.0, Vector1::new(1.0)).unwrap();
+        s.advance(&Forced(0.0), 1.0, 1.0).unwrap();
+        assert!(s.last_step().0 >= 2, "order {}", s.last_step().0);
+        // A change of f far below the tolerance: the history survives it.
+        let mut small = s.clone();
+        let outcome = small.probe_step(&Forced(1e-12), 2.0).unwrap();
+        assert!(matches!(outcome, StepOutcome::Stepped | StepOutcome::ReachedStop));
+        assert!(small.t() > 1.0);
+        // A jump of f of the size of the solution: the first attempt fails its error test and
+        // the solver is left where it was, for the caller to restart.
+        let (y, failures) = (*s.y(), s.stats().error_test_failures);
+        assert_eq!(s.probe_step(&Forced(1.0), 2.0).unwrap(), StepOutcome::Rejected);
+        assert_eq!((s.t(), *s.y()), (1.0, y));
+        assert_eq!(s.stats().error_test_failures, failures + 1);
+        s.reinit(s.t(), y).unwrap();
+        s.advance(&Forced(1.0), 2.0, 2.0).unwrap();
+        // y(t) = 1 − (1 − y(1))·e^{−(t−1)} after the jump
+        let exact = 1.0 - (1.0 - y[0]) * math::exp(-1.0);
+        assert!((s.y()[0] - exact).abs() < 1e-7, "{} vs {exact}", s.y()[0]);
     }
 
     #[test]
