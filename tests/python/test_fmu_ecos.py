@@ -62,6 +62,10 @@ RTOL = 1e-6  # the FMU's tolerance when setupExperiment defines none (Ecos defin
 # K_GRID * RTOL * max|y| per state. Measured K = 84 (v1), 108 (theta1), 109 (u2).
 K_GRID = 1000.0
 JUMP = 1e12  # rad: the input jump at t = 1 that no step can follow (test_fmu_failure.py)
+# rad/s: phi before the jump, a slow ramp, so that v1 moves until the failed step and its freeze shows
+# (at phi = 0 the beam rests at v1 = 0 exactly, which the FMU also reports when the first attempt after
+# the jump fails)
+RAMP = 0.1
 
 
 @pytest.fixture(scope="module")
@@ -188,8 +192,9 @@ def test_ecos_enumerations_cannot_be_set(ecos, fmu_file, capfd, fmu_report):
 
 
 def test_ecos_ignores_a_failed_step(ecos, fmu_file, capfd, fmu_report):
-    """Ecos checks no status: a step the FMU cannot complete (phi jumps by JUMP at t = 1, as in
-    test_fmu_failure.py: the FMU returns fmi2Discard, then refuses every further step with fmi2Error)
+    """Ecos checks no status: a step the FMU cannot complete (phi ramps at RAMP, then jumps by JUMP at
+    t = 1, as in test_fmu_failure.py: the FMU returns fmi2Discard, then refuses every further step with
+    fmi2Error)
     does not stop it. Its time runs on to 10.2 s while the outputs stay at the last successful step, and
     with loggingOn = false and a logger that discards everything, nothing about it reaches the output."""
     sim, structure = new_simulation(ecos, fmu_file)
@@ -197,7 +202,7 @@ def test_ecos_ignores_a_failed_step(ecos, fmu_file, capfd, fmu_report):
     t, v1 = [], []
     for _ in range(N_COMM):
         tc = sim.get_time()
-        sim.set_real("beam::phi", JUMP if tc >= 1.0 else 0.0)
+        sim.set_real("beam::phi", JUMP if tc >= 1.0 else RAMP * tc)
         t.append(sim.step())
         v1.append(sim.get_real("beam::v1"))
     close(sim, structure)

@@ -3,7 +3,7 @@
 FMPy 0.3.32's simulate_fmu retries a step that returned fmi2Discard for ever unless the FMU reports
 fmi2Terminated = true; then it records the outputs at fmi2LastSuccessfulTime and stops. The failing
 input: phi jumps by 1e12 rad at t = 1 (non-physical: the hinge would have to turn 1e12 rad in one
-communication step), which the integrator cannot follow (step size underflow just after t = 1).
+communication step), which the integrator cannot follow: the first step after t = 1 fails.
 
 Guards against a hang: simulate_fmu(timeout=...) and SIGALRM, which fails the test instead.
 """
