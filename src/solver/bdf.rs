@@ -365,6 +365,15 @@ impl<const N: usize> Bdf<N> {
         &self.cfg
     }
 
+    /// The solver as a state read from this one's: the stability guard's modes computed if
+    /// they are pending.
+    #[cfg(test)]
+    pub(crate) fn settled(&self) -> Self {
+        let mut s = self.clone();
+        s.guard = s.guard.resolved(&s.jac);
+        s
+    }
+
     /// Order and size of the last accepted step (0 and 0.0 before the first).
     pub fn last_step(&self) -> (usize, f64) {
         (self.qu, self.hu)
@@ -653,7 +662,15 @@ impl<const N: usize> Bdf<N> {
         v.real("rate", &mut self.rate);
         v.count("steps_at_lu", &mut self.steps_at_lu);
         v.count("steps_at_jac", &mut self.steps_at_jac);
-        self.guard.visit(v);
+        // The state holds the guard's modes, computed for it if they are pending (from the
+        // Jacobian they would be computed from later, so a restored run continues alike).
+        // Writing leaves this solver as it was; reading other modes takes them.
+        let resolved = self.guard.resolved(&self.jac);
+        let mut visited = resolved.clone();
+        visited.visit(v);
+        if visited != resolved {
+            self.guard = visited;
+        }
         v.flag("started", &mut self.started);
         let mut landing = self.landing.is_some();
         let mut tstop = self.landing.unwrap_or(0.0);
@@ -1044,6 +1061,9 @@ impl<const N: usize> Bdf<N> {
             }
         } else {
             self.qwait = self.qwait.max(2);
+        }
+        if self.cfg.stability_guard {
+            self.guard.prepare(q_next, self.h * eta, &self.jac);
         }
         if self.cfg.stability_guard && self.guard.max_safe_order(q_next, self.h * eta) < q_next {
             // A weakly damped mode of J would sit in the unstable band of that order: take

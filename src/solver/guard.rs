@@ -79,19 +79,68 @@ pub(crate) struct StabilityGuard {
     /// enters the unstable band of BDF_q (∞ if none can). Below it order q needs no check,
     /// which is every step of a run whose modes are resolved.
     unsafe_from: [f64; 6],
+    /// The modes of the last Jacobian are not computed yet: `unsafe_from` then holds the
+    /// bounds from its spectral radius bound, and [`prepare`](Self::prepare) computes them
+    /// when a step reaches one.
+    pending: bool,
 }
 
 impl Default for StabilityGuard {
     fn default() -> Self {
-        Self { modes: [Mode::default(); MAX_MODES], count: 0, unsafe_from: [f64::INFINITY; 6] }
+        Self {
+            modes: [Mode::default(); MAX_MODES],
+            count: 0,
+            unsafe_from: [f64::INFINITY; 6],
+            pending: false,
+        }
     }
 }
 
 impl StabilityGuard {
-    /// Stores the oscillatory modes of `jac`. Called at Jacobian evaluations only (not every
-    /// step). If the eigenvalue iteration fails, no mode is stored and the guard allows any
-    /// order, as it does without a Jacobian.
+    /// Takes a new Jacobian `jac` (at Jacobian evaluations only, not every step). Its modes
+    /// are computed only when a step could reach the unstable band of one of them: every
+    /// eigenvalue has |λ| ≤ ρ̄ = ‖J²‖∞^½ (ρ(J)² = ρ(J²), which no induced norm is below), so a
+    /// step with h·ρ̄ below BDF3's lower band edge needs none. For a mechanical system the
+    /// square matters: ‖J‖ grows with ω², ‖J²‖^½ with ω. The decisions are those of the
+    /// modes computed at once.
     pub(crate) fn update<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
+        let square = jac * jac;
+        let norm = square.row_iter().map(|row| row.iter().map(|x| x.abs()).sum::<f64>());
+        let bound = norm.fold(0.0, f64::max).sqrt();
+        self.count = 0;
+        self.pending = true;
+        for (q, from) in self.unsafe_from.iter_mut().enumerate() {
+            *from = unstable_band(q).map_or(f64::INFINITY, |(lo, _)| lo / bound);
+        }
+        // A Jacobian that is not finite has no modes to find: the guard allows any order.
+        if !bound.is_finite() {
+            self.resolve(jac);
+        }
+    }
+
+    /// Computes the modes of `jac`, the Jacobian of the last [`update`](Self::update), if a
+    /// step `h` of order up to `q` may need them.
+    pub(crate) fn prepare<const N: usize>(&mut self, q: usize, h: f64, jac: &SMatrix<f64, N, N>) {
+        if self.pending && q >= 3 && h.abs() >= self.unsafe_from[3] {
+            self.resolve(jac);
+        }
+    }
+
+    /// A copy with the modes of `jac` computed if they are pending.
+    pub(crate) fn resolved<const N: usize>(&self, jac: &SMatrix<f64, N, N>) -> StabilityGuard {
+        let mut g = self.clone();
+        g.resolve(jac);
+        g
+    }
+
+    /// Stores the oscillatory modes of `jac` if they are pending. If the eigenvalue
+    /// iteration fails, no mode is stored and the guard allows any order, as it does without
+    /// a Jacobian.
+    pub(crate) fn resolve<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
+        if !self.pending {
+            return;
+        }
+        self.pending = false;
         self.count = 0;
         let Some(eigenvalues) = eigenvalues(jac) else {
             self.derive_bounds();
@@ -123,8 +172,10 @@ impl StabilityGuard {
         }
     }
 
-    /// Visits every stored slot (modulus, angle), in use or not, then the count.
+    /// Visits every stored slot (modulus, angle), in use or not, then the count, of a guard
+    /// whose modes are not pending ([`resolved`](Self::resolved)).
     pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
+        debug_assert!(!self.pending);
         for m in &mut self.modes {
             v.real("guard.modulus", &mut m.modulus);
             v.real("guard.angle", &mut m.angle_deg);
@@ -147,6 +198,7 @@ impl StabilityGuard {
     /// Forgets the stored modes (the guard then allows any order).
     pub(crate) fn clear(&mut self) {
         self.count = 0;
+        self.pending = false;
         self.derive_bounds();
     }
 
@@ -301,17 +353,27 @@ mod tests {
         let jac = Matrix2::new(0.0, 1.0, -omega * omega, 0.0);
         let mut g = StabilityGuard::default();
         g.update(&jac);
-        assert_eq!(g.count, 1);
-        assert!((g.modes[0].modulus - omega).abs() < 1e-9);
+        // h·ω = 0.1: below every band, and below BDF3's for the bound ρ̄ = ω too: the modes
+        // are not computed.
+        g.prepare(5, 0.001, &jac);
+        assert!(g.pending && g.count == 0);
+        assert_eq!(g.max_safe_order(5, 0.001), 5);
+        // BDF2 has no band: no step of order 2 needs them either.
+        g.prepare(2, 1.0, &jac);
+        assert!(g.pending);
         // h·ω = 2: inside the bands of BDF4 and BDF5 and above BDF3's.
+        g.prepare(5, 0.02, &jac);
+        assert!(!g.pending && g.count == 1);
+        assert!((g.modes[0].modulus - omega).abs() < 1e-9);
         assert_eq!(g.max_safe_order(5, 0.02), 3);
-        // h·ω = 0.1: below every band.
         assert_eq!(g.max_safe_order(5, 0.001), 5);
         // h·ω = 1: BDF5 and BDF4 unsafe, and BDF3 too: cap at 2.
         assert_eq!(g.max_safe_order(5, 0.01), 2);
         // A strongly damped mode (angle within α_5) never caps.
         let damped = Matrix2::new(0.0, 1.0, -omega * omega, -1.9 * omega);
         g.update(&damped);
+        g.prepare(5, 0.02, &damped);
+        assert!(!g.pending);
         assert_eq!(g.max_safe_order(5, 0.02), 5);
     }
 }
