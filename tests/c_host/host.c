@@ -24,7 +24,7 @@
  * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB]
  *                     [--save-state S STATE.bin] [--resume STATE.bin]
  *                     [--no-dlclose | --reloads R]
- *        host UNZIPDIR --bench-dostep ROUNDS [--feed FEED]
+ *        host UNZIPDIR --bench-dostep ROUNDS [--feed FEED] [--h H]
  * --so loads another build of the library (with the unzipped FMU's modelDescription.xml);
  * --cycles 0 and --threads 0 skip checks 2 and 3.
  * --save-state S FILE: in the scene (check 1), after communication step S (t = S*h, once its
@@ -38,7 +38,8 @@
  * --no-dlclose keeps the library loaded at exit; --reloads R then loads, uses (one plain and one
  * FMU-state cycle) and unloads it R more times.
  * --bench-dostep ROUNDS replaces the checks by the benchmark of fmi2DoStep (section 4, run by
- * `cargo xtask bench`); --feed FEED runs one way of sending phi only (for a profiler).
+ * `cargo xtask bench`); --feed FEED runs one way of sending phi only, --h H one communication step
+ * only (for a profiler: `valgrind --tool=callgrind` counts its instructions).
  * Exit code: 0 when every check passed, 1 on a failure (with a message on stderr), 2 on bad usage.
  *
  * What differs between POSIX and Windows (loading the library and its error text, threads and
@@ -1234,7 +1235,7 @@ out:
 
 /* ROUNDS rounds after a warm-up round 0, each running every feed at every communication step in
  * an order shuffled with the round as seed; one CSV row per run on stdout. */
-static int bench_dostep(const Host *h, int rounds, const char *only, Err *err) {
+static int bench_dostep(const Host *h, int rounds, const char *only, double only_h, Err *err) {
     enum { N_CASES = N_FEEDS * N_BENCH_H };
     int order[N_CASES];
     printf("round,feed,h,steps,seconds\n");
@@ -1251,6 +1252,7 @@ static int bench_dostep(const Host *h, int rounds, const char *only, Err *err) {
             int feed = order[i] / (int)N_BENCH_H;
             double hc = BENCH_H[order[i] % (int)N_BENCH_H];
             if (only && strcmp(only, FEEDS[feed])) continue;
+            if (only_h > 0.0 && hc != only_h) continue;
             double seconds = 0.0;
             int steps = 0;
             if (bench_case(h, feed, hc, &seconds, &steps, err)) return -1;
@@ -1267,7 +1269,7 @@ static int usage(void) {
     fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB] "
                     "[--save-state S STATE.bin] [--resume STATE.bin] "
                     "[--no-dlclose | --reloads R]\n"
-                    "       host UNZIPDIR --bench-dostep ROUNDS [--feed FEED]\n");
+                    "       host UNZIPDIR --bench-dostep ROUNDS [--feed FEED] [--h H]\n");
     return 2;
 }
 
@@ -1283,6 +1285,7 @@ int main(int argc, char **argv) {
     const char *unzipdir = NULL, *out_csv = NULL, *so = NULL;
     int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1, bench_rounds = -1;
     const char *bench_only = NULL;
+    double bench_h = 0.0;
     StateIO io = {.save_step = -1};
     platform_init();
     for (int a = 1; a < argc; a++) {
@@ -1305,6 +1308,8 @@ int main(int argc, char **argv) {
             bench_rounds = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--feed") && a + 1 < argc)
             bench_only = argv[++a];
+        else if (!strcmp(argv[a], "--h") && a + 1 < argc)
+            bench_h = atof(argv[++a]);
         else if (!strcmp(argv[a], "--no-dlclose"))
             do_dlclose = 0;
         else if (argv[a][0] != '-' && !unzipdir)
@@ -1335,7 +1340,7 @@ int main(int argc, char **argv) {
     Api api;
     if (load_api(lib, &api, &err)) goto failed;
     Host host = {&api, &model, resources};
-    if (bench_rounds >= 0) return bench_dostep(&host, bench_rounds, bench_only, &err) ? (fprintf(stderr, "host: FAILED: %s\n", err.msg), 1) : 0;
+    if (bench_rounds >= 0) return bench_dostep(&host, bench_rounds, bench_only, bench_h, &err) ? (fprintf(stderr, "host: FAILED: %s\n", err.msg), 1) : 0;
     printf("host library=%s guid=%s\n", lib_path, model.guid);
 
     if (check_scene(&host, out_csv, &io, &err)) goto failed;
