@@ -86,6 +86,15 @@ impl Values {
         v
     }
 
+    /// Sets the input `phi`, which must be finite.
+    pub(super) fn set_phi(&mut self, x: f64) -> Result<(), String> {
+        if !x.is_finite() {
+            return Err(format!("`phi` = {x:?} is out of range: must be finite"));
+        }
+        self.phi = x;
+        Ok(())
+    }
+
     /// Sets `var` after checking the value's range; the error names the variable and the
     /// allowed range.
     pub(super) fn set(&mut self, var: &Variable, value: Value) -> Result<(), String> {
@@ -108,9 +117,9 @@ impl Values {
                     Var::Atol | Var::FixedStep => {
                         return bad("non-negative and finite", format!("{x:?}"))
                     }
-                    Var::PhiEnd | Var::Phi if !finite => return bad("finite", format!("{x:?}")),
+                    Var::PhiEnd if !finite => return bad("finite", format!("{x:?}")),
                     Var::PhiEnd => self.law.phi_end = x,
-                    Var::Phi => self.phi = x,
+                    Var::Phi => self.set_phi(x)?,
                     _ => unreachable!("outputs are rejected before, other types by type"),
                 }
             }

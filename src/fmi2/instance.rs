@@ -644,9 +644,27 @@ impl Instance {
         self.status(r)
     }
 
-    /// fmi2SetReal.
+    /// fmi2SetReal. The input `phi` alone, which a host sends at every communication point,
+    /// goes the short way: it is an input, which every state that allows the call takes.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        if let ([vr], [x]) = (vrs, values) {
+            if *vr == Var::Phi.vr() {
+                let r = self.set_phi(*x, vrs, values);
+                return self.status(r);
+            }
+        }
         self.set_all("fmi2SetReal", BaseType::Real, vrs, values, Value::Real)
+    }
+
+    /// [`set_all`](Self::set_all) for the input `phi` alone: the same checks, results and
+    /// messages.
+    fn set_phi(&mut self, x: f64, vrs: &[u32], values: &[f64]) -> FmiResult {
+        const F: &str = "fmi2SetReal";
+        self.allowed(F, mask::SET)?;
+        self.core.values.set_phi(x).map_err(|msg| FmiError::error(format!("{F}: {msg}")))?;
+        self.core.cache = OutputCache::default();
+        trace!(self, "{F}: {}", Listing(vrs, values));
+        Ok(Status::Ok)
     }
 
     /// fmi2SetInteger (integers and enumerations).
