@@ -1062,10 +1062,9 @@ impl<const N: usize> Bdf<N> {
         } else {
             self.qwait = self.qwait.max(2);
         }
-        if self.cfg.stability_guard {
-            self.guard.prepare(q_next, self.h * eta, &self.jac);
-        }
-        if self.cfg.stability_guard && self.guard.max_safe_order(q_next, self.h * eta) < q_next {
+        if self.cfg.stability_guard
+            && self.guard.max_safe_order(q_next, self.h * eta, &self.jac) < q_next
+        {
             // A weakly damped mode of J would sit in the unstable band of that order: take
             // instead the stable order whose own error estimate allows the largest step, if
             // one keeps the resolved modes accurate. If none does, the mode is left to the

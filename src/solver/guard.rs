@@ -80,8 +80,8 @@ pub(crate) struct StabilityGuard {
     /// which is every step of a run whose modes are resolved.
     unsafe_from: [f64; 6],
     /// The modes of the last Jacobian are not computed yet: `unsafe_from` then holds the
-    /// bounds from its spectral radius bound, and [`prepare`](Self::prepare) computes them
-    /// when a step reaches one.
+    /// bounds from its spectral radius bound, and [`max_safe_order`](Self::max_safe_order)
+    /// computes them when a step reaches one.
     pending: bool,
 }
 
@@ -114,14 +114,6 @@ impl StabilityGuard {
         }
         // A Jacobian that is not finite has no modes to find: the guard allows any order.
         if !bound.is_finite() {
-            self.resolve(jac);
-        }
-    }
-
-    /// Computes the modes of `jac`, the Jacobian of the last [`update`](Self::update), if a
-    /// step `h` of order up to `q` may need them.
-    pub(crate) fn prepare<const N: usize>(&mut self, q: usize, h: f64, jac: &SMatrix<f64, N, N>) {
-        if self.pending && q >= 3 && h.abs() >= self.unsafe_from[3] {
             self.resolve(jac);
         }
     }
@@ -202,9 +194,18 @@ impl StabilityGuard {
         self.derive_bounds();
     }
 
-    /// The highest order ≤ `q` at which step `h` keeps every stored mode outside the
-    /// unstable band.
-    pub(crate) fn max_safe_order(&self, q: usize, h: f64) -> usize {
+    /// The highest order ≤ `q` at which step `h` keeps every mode of `jac`, the Jacobian of
+    /// the last [`update`](Self::update), outside the unstable band. The modes are computed
+    /// here if the step may need them.
+    pub(crate) fn max_safe_order<const N: usize>(
+        &mut self,
+        q: usize,
+        h: f64,
+        jac: &SMatrix<f64, N, N>,
+    ) -> usize {
+        if self.pending && q >= 3 && h.abs() >= self.unsafe_from[3] {
+            self.resolve(jac);
+        }
         let mut k = q;
         while k >= 3 && h.abs() >= self.unsafe_from[k] && !self.safe(k, h) {
             k -= 1;
@@ -355,25 +356,22 @@ mod tests {
         g.update(&jac);
         // h·ω = 0.1: below every band, and below BDF3's for the bound ρ̄ = ω too: the modes
         // are not computed.
-        g.prepare(5, 0.001, &jac);
+        assert_eq!(g.max_safe_order(5, 0.001, &jac), 5);
         assert!(g.pending && g.count == 0);
-        assert_eq!(g.max_safe_order(5, 0.001), 5);
         // BDF2 has no band: no step of order 2 needs them either.
-        g.prepare(2, 1.0, &jac);
+        assert_eq!(g.max_safe_order(2, 1.0, &jac), 2);
         assert!(g.pending);
         // h·ω = 2: inside the bands of BDF4 and BDF5 and above BDF3's.
-        g.prepare(5, 0.02, &jac);
+        assert_eq!(g.max_safe_order(5, 0.02, &jac), 3);
         assert!(!g.pending && g.count == 1);
         assert!((g.modes[0].modulus - omega).abs() < 1e-9);
-        assert_eq!(g.max_safe_order(5, 0.02), 3);
-        assert_eq!(g.max_safe_order(5, 0.001), 5);
+        assert_eq!(g.max_safe_order(5, 0.001, &jac), 5);
         // h·ω = 1: BDF5 and BDF4 unsafe, and BDF3 too: cap at 2.
-        assert_eq!(g.max_safe_order(5, 0.01), 2);
+        assert_eq!(g.max_safe_order(5, 0.01, &jac), 2);
         // A strongly damped mode (angle within α_5) never caps.
         let damped = Matrix2::new(0.0, 1.0, -omega * omega, -1.9 * omega);
         g.update(&damped);
-        g.prepare(5, 0.02, &damped);
+        assert_eq!(g.max_safe_order(5, 0.02, &damped), 5);
         assert!(!g.pending);
-        assert_eq!(g.max_safe_order(5, 0.02), 5);
     }
 }
