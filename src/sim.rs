@@ -745,7 +745,9 @@ impl Run {
         self.piece = match (kind, self.input) {
             (0, PhiInput::Law(law)) => PhiPiece::Turn(law),
             (1, _) => PhiPiece::Hold(r[0]),
-            (2, _) => PhiPiece::Poly(Poly::new(r[0], r[1], [r[2], r[3], r[4], r[5], r[6], r[7]])),
+            (2, _) => {
+                PhiPiece::Poly(Poly { t0: r[0], h: r[1], c: [r[2], r[3], r[4], r[5], r[6], r[7]] })
+            }
             // Refused by `check_state`: a law's turn in a host-driven run, or a bad kind.
             _ => PhiPiece::Hold(f64::NAN),
         };

@@ -67,18 +67,12 @@ pub struct Poly {
     pub t0: f64,
     pub h: f64,
     pub c: [f64; 6],
-    /// 1/h, once: the right-hand side evaluates the piece at every Newton iteration.
-    inv: f64,
 }
 
 impl Poly {
-    pub fn new(t0: f64, h: f64, c: [f64; 6]) -> Poly {
-        Poly { t0, h, c, inv: 1.0 / h }
-    }
-
     /// φ + φ′(t − t0) + ½φ″(t − t0)², the Taylor polynomial at t0.
     pub fn taylor(t0: f64, at: Phi) -> Poly {
-        Poly::new(t0, 1.0, [at.phi, at.dphi, 0.5 * at.ddphi, 0.0, 0.0, 0.0])
+        Poly { t0, h: 1.0, c: [at.phi, at.dphi, 0.5 * at.ddphi, 0.0, 0.0, 0.0] }
     }
 
     /// The cubic on [t0, t0 + h] from φ and φ′ of `start` (its φ″ is not used) to φ and φ′
@@ -88,7 +82,7 @@ impl Poly {
         let r0 = end.phi - a0 - a1;
         let r1 = end.dphi * h - a1;
         // c2 + c3 = r0, 2c2 + 3c3 = r1.
-        Poly::new(t0, h, [a0, a1, 3.0 * r0 - r1, r1 - 2.0 * r0, 0.0, 0.0])
+        Poly { t0, h, c: [a0, a1, 3.0 * r0 - r1, r1 - 2.0 * r0, 0.0, 0.0] }
     }
 
     /// The quintic on [t0, t0 + h] from φ, φ′, φ″ of `start` to those of `end`.
@@ -101,11 +95,12 @@ impl Poly {
         let c3 = 10.0 * r0 - 4.0 * r1 + 0.5 * r2;
         let c4 = -15.0 * r0 + 7.0 * r1 - r2;
         let c5 = 6.0 * r0 - 3.0 * r1 + 0.5 * r2;
-        Poly::new(t0, h, [a0, a1, a2, c3, c4, c5])
+        Poly { t0, h, c: [a0, a1, a2, c3, c4, c5] }
     }
 
     pub fn eval(&self, t: f64) -> Phi {
-        let inv = self.inv;
+        // One division: the right-hand side evaluates this at every Newton iteration.
+        let inv = 1.0 / self.h;
         let s = (t - self.t0) * inv;
         let c = &self.c;
         let (mut p, mut dp, mut ddp) = (c[5], 0.0, 0.0);
@@ -119,7 +114,7 @@ impl Poly {
 
     /// φ, φ′, φ″ at t0 (what [`eval`](Self::eval) gives there, without the Horner steps).
     pub fn at_start(&self) -> Phi {
-        let inv = self.inv;
+        let inv = 1.0 / self.h;
         let c = &self.c;
         Phi { phi: c[0], dphi: c[1] * inv, ddphi: 2.0 * c[2] * (inv * inv) }
     }
@@ -127,7 +122,7 @@ impl Poly {
     /// Whether φ, φ′ and φ″ are finite over the piece's step: finite coefficients, and
     /// 1/h² finite (a step so short that it overflows gives no finite φ″).
     pub fn is_finite(&self) -> bool {
-        let inv = self.inv;
+        let inv = 1.0 / self.h;
         let sum: f64 = self.c.iter().map(|c| c.abs()).sum();
         self.t0.is_finite() && (sum * inv * inv * 20.0).is_finite() && self.h > 0.0
     }
