@@ -6,6 +6,8 @@
 //! - [`solver`]: our BDF integrator, generic over the system size. No I/O.
 //! - [`sim`]: the driver that runs a scene and samples it on an output grid.
 //! - [`math`]: sin, cos, exp, pow, ..., one implementation on every platform.
+//! - `study` (feature `study`, on by default): design studies, many runs of one scene over
+//!   parameter grids and Latin hypercube samples, with metrics per run.
 //!
 //! The FMI 2.0 layer (`fmi2`, the only `unsafe` code) sits on top of these.
 //!
@@ -31,3 +33,5 @@ pub mod math;
 pub mod model;
 pub mod sim;
 pub mod solver;
+#[cfg(feature = "study")]
+pub mod study;

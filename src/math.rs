@@ -39,6 +39,12 @@ pub fn exp(x: f64) -> f64 {
     libm::exp(x)
 }
 
+/// The complementary error function erfc x = 1 − erf x.
+#[inline]
+pub fn erfc(x: f64) -> f64 {
+    libm::erfc(x)
+}
+
 /// The natural logarithm of x.
 #[inline]
 pub fn ln(x: f64) -> f64 {

@@ -146,6 +146,16 @@ impl Scene {
             return Ok(());
         }
         let value: f64 = text.parse().map_err(|_| format!("`{name}` = {text}: not a number"))?;
+        self.set_parsed(name, value, text)
+    }
+
+    /// Sets one named number: a model parameter or a numeric key of [`SCENE_KEYS`], with the
+    /// checks and messages of [`set`](Self::set).
+    pub fn set_number(&mut self, name: &str, value: f64) -> Result<(), String> {
+        self.set_parsed(name, value, &value.to_string())
+    }
+
+    fn set_parsed(&mut self, name: &str, value: f64, text: &str) -> Result<(), String> {
         if self.params.set(name, value).map_err(|e| e.to_string())? {
             return Ok(());
         }
@@ -308,9 +318,21 @@ pub struct Report {
 }
 
 /// Runs the scene, calling `sink` with the outputs at every output time.
-pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Report, SimError> {
-    let model = scene.validate()?;
-    let (law, solver, init) = (scene.law, &scene.solver, scene.initial);
+pub fn simulate(scene: &Scene, sink: impl FnMut(&Outputs)) -> Result<Report, SimError> {
+    let (report, result) = simulate_partial(scene, sink);
+    result.map(|()| report)
+}
+
+/// [`simulate`], which also reports a failed run: the counters up to the failure, and the
+/// warning if one came first. A run that fails before its first step has zero counters.
+pub fn simulate_partial(
+    scene: &Scene,
+    mut sink: impl FnMut(&Outputs),
+) -> (Report, Result<(), SimError>) {
+    let mut run = match start(scene) {
+        Ok(run) => run,
+        Err(e) => return (Report::default(), Err(e)),
+    };
     let mut warning = None;
     let mut emit = |run: &mut Run, t: f64| {
         if let Some(w) = run.take_warning() {
@@ -319,36 +341,56 @@ pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Report,
         sink(&run.outputs_at(t)?);
         Ok(())
     };
-    let outputs = scene.output_times();
+    let result = drive(scene, &mut run, &mut emit);
+    let warning = warning.or_else(|| run.take_warning());
+    (Report { stats: run.stats(), warning }, result)
+}
+
+/// The law's φ, φ′, φ″ at t as a host sends them with `scene.phi_feed`.
+fn host_sample(scene: &Scene, t: f64) -> Sample {
+    match scene.phi_feed {
+        PhiFeed::Derivatives => Sample::with_derivatives(t, scene.law.eval(t)),
+        _ => Sample::value(t, scene.law.eval(t).phi),
+    }
+}
+
+/// The run of `simulate` at t = 0, before its first step.
+fn start(scene: &Scene) -> Result<Run, SimError> {
+    let model = scene.validate()?;
+    let (formulation, solver, init) = (scene.formulation, &scene.solver, scene.initial);
     let mut run = if scene.phi_feed == PhiFeed::Law {
-        let mut run = Run::with_law(model, scene.formulation, solver, 0.0, init, law)?;
-        run.set_range_check(scene.range_check);
-        run.step_to_sampling(scene.t_end, outputs, &mut emit)?;
-        run
+        Run::with_law(model, formulation, solver, 0.0, init, scene.law)?
     } else {
-        // As a host does: the law's value (and derivatives) at each communication point.
-        let sample = |t: f64| match scene.phi_feed {
-            PhiFeed::Derivatives => Sample::with_derivatives(t, law.eval(t)),
-            _ => Sample::value(t, law.eval(t).phi),
-        };
         let signal = HostSignal::new(scene.phi_interpolation, scene.phi_extrapolation);
-        let mut run =
-            Run::with_host(model, scene.formulation, solver, 0.0, init, signal, sample(0.0))?;
-        run.set_range_check(scene.range_check);
-        let mut outputs = outputs.peekable();
-        let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
-        for w in comm.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            run.set_sample(sample(a));
-            let mut times = Vec::new();
-            while let Some(t) = outputs.next_if(|&t| t <= b) {
-                times.push(t);
-            }
-            run.step_to_sampling(b, times, &mut emit)?;
-        }
-        run
+        Run::with_host(model, formulation, solver, 0.0, init, signal, host_sample(scene, 0.0))?
     };
-    Ok(Report { stats: run.stats(), warning: warning.or_else(|| run.take_warning()) })
+    run.set_range_check(scene.range_check);
+    Ok(run)
+}
+
+/// Steps `run` to t_end, calling `emit` at every output time.
+fn drive(
+    scene: &Scene,
+    run: &mut Run,
+    emit: &mut impl FnMut(&mut Run, f64) -> Result<(), SimError>,
+) -> Result<(), SimError> {
+    let outputs = scene.output_times();
+    if scene.phi_feed == PhiFeed::Law {
+        return run.step_to_sampling(scene.t_end, outputs, emit);
+    }
+    // As a host does: the law's value (and derivatives) at each communication point.
+    let mut outputs = outputs.peekable();
+    let comm: Vec<f64> = grid(scene.dt_comm, scene.t_end).collect();
+    for w in comm.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        run.set_sample(host_sample(scene, a));
+        let mut times = Vec::new();
+        while let Some(t) = outputs.next_if(|&t| t <= b) {
+            times.push(t);
+        }
+        run.step_to_sampling(b, times, &mut *emit)?;
+    }
+    Ok(())
 }
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds

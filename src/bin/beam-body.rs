@@ -5,15 +5,19 @@
 //!                    [--fixed-step H --order K] [--max-order K] [--no-guard] [-o OUT.csv]
 //! beam-body modes [SCENE.toml] [--set NAME=VALUE]...
 //! beam-body residual --formulation F [--set NAME=VALUE]...   (stdin → stdout, for the oracle)
+//! beam-body study STUDY.toml [--cases A..B] [--threads N] [--scene FILE] [--quiet] [-o OUT.csv]
+//! beam-body study STUDY.toml --plan
 //! ```
 
 use beam_body::model::{BeamBody, Formulation, Outputs, Phi};
 use beam_body::sim::{scene_entries, simulate, Scene};
+use beam_body::study::{run_cases, Row, Status, Study};
 use nalgebra::{Vector2, Vector3};
 use std::f64::consts::PI;
-use std::io::{self, BufRead, BufWriter, Write};
+use std::io::{self, BufRead, BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 const USAGE: &str = "\
 usage:
@@ -29,6 +33,15 @@ usage:
         dae, dae-stabilized: phi dphi ddphi v1 theta1 u2 dv1 dtheta1 du2 ddv1 ddtheta1 ddu2
       and writes the residuals of the equations of motion, then the accelerations of the
       model's right-hand side.
+  beam-body study STUDY.toml [--cases A..B] [--threads N] [--scene FILE] [--quiet] [-o OUT.csv]
+      Runs a design study (README: Design studies) on every core and writes one CSV row
+      per case: case, the parameters, the metrics, status, message, steps. Cases A..B
+      (half-open) only, with --cases; the base scene FILE instead of the study's `scene`,
+      with --scene. Progress goes to stderr (not with --quiet). The file appears when the
+      study is done.
+  beam-body study STUDY.toml --plan
+      Checks the study and prints, as JSON, its number of cases, its columns and the path
+      of its base scene; runs nothing.
 
 options:
   --formulation F     reduced | dae | dae-stabilized | linear   (default reduced)
@@ -52,6 +65,7 @@ fn main() -> ExitCode {
         Some("simulate") => cmd_simulate(&args[1..]),
         Some("modes") => cmd_modes(&args[1..]),
         Some("residual") => cmd_residual(&args[1..]),
+        Some("study") => cmd_study(&args[1..]),
         Some("help" | "--help" | "-h") => {
             print!("{USAGE}");
             Ok(())
@@ -265,4 +279,263 @@ fn cmd_residual(args: &[String]) -> Result<(), Usage> {
         writeln!(out, "{}", text.join(" ")).map_err(|e| Usage(e.to_string()))?;
     }
     out.flush().map_err(|e| Usage(e.to_string()))
+}
+
+/// The options of `study`.
+struct StudyArgs {
+    file: String,
+    output: Option<String>,
+    cases: Option<(u64, u64)>,
+    threads: Option<usize>,
+    scene: Option<String>,
+    quiet: bool,
+    plan: bool,
+}
+
+fn parse_study_args(args: &[String]) -> Result<StudyArgs, Usage> {
+    let mut out = StudyArgs {
+        file: String::new(),
+        output: None,
+        cases: None,
+        threads: None,
+        scene: None,
+        quiet: false,
+        plan: false,
+    };
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        let mut value =
+            |flag: &str| it.next().cloned().ok_or_else(|| Usage(format!("{flag} needs a value")));
+        match arg.as_str() {
+            "-o" | "--output" => out.output = Some(value(arg)?),
+            "--cases" => {
+                let text = value(arg)?;
+                let range = text.split_once("..").and_then(|(a, b)| {
+                    Some((a.trim().parse::<u64>().ok()?, b.trim().parse::<u64>().ok()?))
+                });
+                match range {
+                    Some((a, b)) if a <= b => out.cases = Some((a, b)),
+                    _ => {
+                        return Err(Usage(format!(
+                            "--cases {text}: expected A..B with integers 0 <= A <= B"
+                        )))
+                    }
+                }
+            }
+            "--threads" => {
+                let text = value(arg)?;
+                match text.parse::<usize>() {
+                    Ok(n) if n >= 1 => out.threads = Some(n),
+                    _ => return Err(Usage(format!("--threads {text}: must be an integer >= 1"))),
+                }
+            }
+            "--scene" => out.scene = Some(value(arg)?),
+            "--quiet" | "-q" => out.quiet = true,
+            "--plan" => out.plan = true,
+            flag if flag.starts_with('-') => {
+                return Err(Usage(format!("unknown option `{flag}`\n\n{USAGE}")))
+            }
+            file if out.file.is_empty() => out.file = file.to_string(),
+            extra => return Err(Usage(format!("unexpected argument `{extra}`"))),
+        }
+    }
+    if out.file.is_empty() {
+        return Err(Usage(format!("study needs a study file\n\n{USAGE}")));
+    }
+    Ok(out)
+}
+
+fn cmd_study(args: &[String]) -> Result<(), Usage> {
+    let a = parse_study_args(args)?;
+    let text = std::fs::read_to_string(&a.file)
+        .map_err(|e| Usage(format!("cannot read study file {}: {e}", a.file)))?;
+    // The base scene: --scene, or the study's `scene` relative to the study file.
+    let dir = Path::new(&a.file).parent().unwrap_or(Path::new("")).to_path_buf();
+    let mut scene_file: Option<PathBuf> = None;
+    let study = Study::parse(&text, |path| {
+        let file = a.scene.as_ref().map_or_else(|| dir.join(path), PathBuf::from);
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| format!("cannot read the scene file {}: {e}", file.display()));
+        scene_file = Some(file);
+        text
+    })
+    .map_err(|e| Usage(format!("{}: {e}", a.file)))?;
+    let total = study.cases();
+    let (first, end) = a.cases.unwrap_or((0, total));
+    if end > total {
+        return Err(Usage(format!(
+            "--cases {first}..{end}: the study has {total} cases (0..{total})"
+        )));
+    }
+    if a.plan {
+        println!("{}", plan_json(&study, scene_file.as_deref()));
+        return Ok(());
+    }
+    let threads =
+        a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+
+    // The rows go to a temporary file beside OUT, renamed to OUT once all are written.
+    let partial = a.output.as_ref().map(|out| format!("{out}.partial-{}", std::process::id()));
+    let sink: Box<dyn Write> = match &partial {
+        Some(path) => Box::new(
+            std::fs::File::create(path).map_err(|e| Usage(format!("cannot create {path}: {e}")))?,
+        ),
+        None => Box::new(io::stdout().lock()),
+    };
+    let mut out = BufWriter::new(sink);
+    let header: Vec<String> = study.columns().into_iter().map(|(name, _)| name).collect();
+    let mut progress = Progress::new(end - first, threads, a.quiet);
+    let mut counts = [0u64; 5];
+    let start = Instant::now();
+    let result = writeln!(out, "{}", header.join(",")).and_then(|()| {
+        run_cases(
+            &study,
+            first..end,
+            threads,
+            |done| progress.update(done),
+            |row| {
+                counts[row.status as usize] += 1;
+                write_study_row(&mut out, &row)
+            },
+        )
+    });
+    let result = result.and_then(|()| out.flush());
+    drop(out);
+    let elapsed = start.elapsed();
+    progress.finish();
+    if let Err(e) = result {
+        if let Some(p) = &partial {
+            let _ = std::fs::remove_file(p);
+        }
+        return Err(Usage(format!("writing the rows failed: {e}")));
+    }
+    if let (Some(p), Some(out)) = (&partial, &a.output) {
+        std::fs::rename(p, out).map_err(|e| Usage(format!("cannot rename {p} to {out}: {e}")))?;
+    }
+    if !a.quiet {
+        let n = end - first;
+        let secs = elapsed.as_secs_f64();
+        let statuses: Vec<String> = [Status::Ok, Status::Warning, Status::Stopped]
+            .into_iter()
+            .chain([Status::Failed, Status::Invalid])
+            .filter(|&s| counts[s as usize] > 0)
+            .map(|s| format!("{} {}", s.name(), counts[s as usize]))
+            .collect();
+        eprintln!(
+            "study: {n} cases in {secs:.2} s, {:.0} cases/s on {threads} threads; {}",
+            n as f64 / secs.max(1e-9),
+            if statuses.is_empty() { "no cases".to_string() } else { statuses.join(", ") }
+        );
+    }
+    Ok(())
+}
+
+/// One CSV row: numbers in Rust's shortest round-trip form (read back exactly), an empty
+/// field for a metric the run did not reach, the message quoted as RFC 4180 has it.
+fn write_study_row(out: &mut impl Write, row: &Row) -> io::Result<()> {
+    write!(out, "{}", row.case)?;
+    for v in &row.values {
+        write!(out, ",{v:e}")?;
+    }
+    for m in &row.metrics {
+        match m {
+            Some(v) => write!(out, ",{v:e}")?,
+            None => write!(out, ",")?,
+        }
+    }
+    let msg = &row.message;
+    if msg.contains([',', '"', '\n', '\r']) {
+        write!(out, ",{},\"{}\",{}", row.status.name(), msg.replace('"', "\"\""), row.steps)?;
+    } else {
+        write!(out, ",{},{msg},{}", row.status.name(), row.steps)?;
+    }
+    writeln!(out)
+}
+
+/// `study --plan`: what the study is, as JSON.
+fn plan_json(study: &Study, scene_file: Option<&Path>) -> String {
+    let quote = |s: &str| {
+        let mut q = String::from('"');
+        for c in s.chars() {
+            match c {
+                '"' => q.push_str("\\\""),
+                '\\' => q.push_str("\\\\"),
+                c if (c as u32) < 0x20 => q.push_str(&format!("\\u{:04x}", c as u32)),
+                c => q.push(c),
+            }
+        }
+        q.push('"');
+        q
+    };
+    let list = |items: Vec<String>| format!("[{}]", items.join(", "));
+    let scene = scene_file
+        .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf()))
+        .map_or("null".to_string(), |p| quote(&p.to_string_lossy()));
+    let columns = study
+        .columns()
+        .into_iter()
+        .map(|(name, ty)| format!("{{\"name\": {}, \"type\": \"{ty}\"}}", quote(&name)))
+        .collect();
+    format!(
+        "{{\"cases\": {}, \"samples\": {}, \"scene\": {scene}, \"parameters\": {}, \"metrics\": {}, \"columns\": {}}}",
+        study.cases(),
+        study.samples(),
+        list(study.parameters().iter().map(|p| quote(&p.name)).collect()),
+        list(study.metrics().iter().map(|m| quote(m.name())).collect()),
+        list(columns)
+    )
+}
+
+/// The progress line of `study` on stderr: redrawn in place on a terminal, a line every 10 s
+/// otherwise.
+struct Progress {
+    total: u64,
+    threads: usize,
+    start: Instant,
+    last: Option<Instant>,
+    every: Duration,
+    terminal: bool,
+    quiet: bool,
+    done: u64,
+}
+
+impl Progress {
+    fn new(total: u64, threads: usize, quiet: bool) -> Self {
+        let terminal = io::stderr().is_terminal();
+        let every = Duration::from_millis(if terminal { 250 } else { 10_000 });
+        Self { total, threads, start: Instant::now(), last: None, every, terminal, quiet, done: 0 }
+    }
+
+    fn update(&mut self, done: u64) {
+        self.done = done;
+        let now = Instant::now();
+        if self.quiet || now.duration_since(self.last.unwrap_or(self.start)) < self.every {
+            return;
+        }
+        self.last = Some(now);
+        let secs = now.duration_since(self.start).as_secs_f64();
+        let rate = done as f64 / secs.max(1e-9);
+        let left = if done > 0 {
+            format!("{:.0} s left", (self.total - done) as f64 / rate)
+        } else {
+            "time left unknown".to_string()
+        };
+        let line = format!(
+            "study: {done}/{} cases  {:.0} %  {rate:.0} cases/s on {} threads  {left}",
+            self.total,
+            100.0 * done as f64 / self.total.max(1) as f64,
+            self.threads
+        );
+        if self.terminal {
+            eprint!("\r{line}\x1b[K");
+        } else {
+            eprintln!("{line}");
+        }
+    }
+
+    fn finish(&self) {
+        if self.terminal && !self.quiet && self.last.is_some() {
+            eprintln!();
+        }
+    }
 }

@@ -288,35 +288,26 @@ impl BeamBody {
         }
     }
 
+    /// The static equilibrium (v1, ϑ1) [m, rad] at a fixed φ: of (15) (which the DAE
+    /// formulations share), or of (16) with `linear`.
+    pub fn equilibrium(&self, phi_fixed: f64, linear: bool) -> (f64, f64) {
+        let phi = Phi { phi: phi_fixed, ..Phi::default() };
+        let q = if linear {
+            static_equilibrium(|q| self.linear(&phi, q, Vector2::zeros()).1)
+        } else {
+            static_equilibrium(|q| self.reduced(&phi, q, Vector2::zeros()).1)
+        };
+        (q[0], q[1])
+    }
+
     /// Natural frequencies of (15) linearised about its static equilibrium at a fixed φ.
     /// The equilibrium solves K q = M2 g J_C(q)ᵀ e_x by Newton's method.
     pub fn modes(&self, phi_fixed: f64) -> Modes {
         let phi = Phi { phi: phi_fixed, ..Phi::default() };
         let force = |q: Vector2<f64>| self.reduced(&phi, q, Vector2::zeros()).1;
-        let stiffness = |q: Vector2<f64>| {
-            // Tangent stiffness −∂F/∂q by central differences.
-            let mut kt = Matrix2::zeros();
-            for j in 0..2 {
-                let e = 1e-7 * (1.0 + q[j].abs());
-                let mut dq = Vector2::zeros();
-                dq[j] = e;
-                kt.set_column(j, &(-(force(q + dq) - force(q - dq)) / (2.0 * e)));
-            }
-            kt
-        };
-        let mut q = Vector2::zeros();
-        for _ in 0..50 {
-            let Some(inv) = stiffness(q).try_inverse() else {
-                break;
-            };
-            let dq = inv * force(q);
-            q += dq;
-            if dq.norm() < 1e-14 * (1.0 + q.norm()) {
-                break;
-            }
-        }
+        let q = static_equilibrium(force);
         let (mass, _) = self.reduced(&phi, q, Vector2::zeros());
-        let kt = stiffness(q);
+        let kt = tangent_stiffness(force, q);
         // Symmetrise: M⁻¹K_t is similar to L⁻¹K_t L⁻ᵀ with M = LLᵀ.
         let omega2 = match mass.cholesky() {
             Some(ch) => {
@@ -332,6 +323,38 @@ impl BeamBody {
         };
         Modes { phi: phi_fixed, equilibrium: (q[0], q[1]), omega2 }
     }
+}
+
+/// The tangent stiffness −∂F/∂q at q, by central differences.
+fn tangent_stiffness(
+    force: impl Fn(Vector2<f64>) -> Vector2<f64>,
+    q: Vector2<f64>,
+) -> Matrix2<f64> {
+    let mut kt = Matrix2::zeros();
+    for j in 0..2 {
+        let e = 1e-7 * (1.0 + q[j].abs());
+        let mut dq = Vector2::zeros();
+        dq[j] = e;
+        kt.set_column(j, &(-(force(q + dq) - force(q - dq)) / (2.0 * e)));
+    }
+    kt
+}
+
+/// The q at rest where the generalised force vanishes, F(q, 0) = 0, by Newton's method from
+/// q = 0 (the equilibria of this beam are near the undeformed state).
+fn static_equilibrium(force: impl Fn(Vector2<f64>) -> Vector2<f64>) -> Vector2<f64> {
+    let mut q = Vector2::zeros();
+    for _ in 0..50 {
+        let Some(inv) = tangent_stiffness(&force, q).try_inverse() else {
+            break;
+        };
+        let dq = inv * force(q);
+        q += dq;
+        if dq.norm() < 1e-14 * (1.0 + q.norm()) {
+            break;
+        }
+    }
+    q
 }
 
 /// x with A x = b by Gaussian elimination with partial pivoting, written out for 3×3 (the

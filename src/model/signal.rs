@@ -514,7 +514,7 @@ impl HostSignal {
             return Err(format!("field `signal_len` = {} is out of range: at most 4", self.len));
         }
         let used = self.samples();
-        let finite = |x: Option<f64>| x.map_or(true, f64::is_finite);
+        let finite = |x: Option<f64>| x.is_none_or(f64::is_finite);
         if !used.iter().all(|s| s.t.is_finite() && s.phi.is_finite())
             || !used.iter().all(|s| finite(s.dphi) && finite(s.ddphi))
         {

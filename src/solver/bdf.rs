@@ -1154,7 +1154,7 @@ impl<const N: usize> Bdf<N> {
             let raw = step_ratio(BIAS_SAME, err, k + 1);
             // Grow only past the usual threshold; shrink at once if the estimate asks for it.
             let eta = if raw < ETA_THRESHOLD { raw.min(1.0) } else { self.limit_growth(raw) };
-            let larger = best.map_or(true, |(_, b)| eta > b);
+            let larger = best.is_none_or(|(_, b)| eta > b);
             if larger && self.guard.acceptable(k, self.h * eta, self.cfg.rtol) {
                 best = Some((k, eta));
             }

@@ -48,7 +48,8 @@ Commands:
           - refuse a stale modelDescription.xml;
           - run the paper's scene (scenes/paper.toml) through the standalone solver,
             the reference (target/fmu/paper.csv);
-          - build the library (cargo rustc --release --lib --crate-type cdylib) and zip
+          - build the library (cargo rustc --release --lib --no-default-features
+            --crate-type cdylib) and zip
             modelDescription.xml, binaries/linux64/BeamBody.so and
             documentation/index.html;
           - --all-platforms: also cross-build win64, macOS (x86_64 and arm64) and Linux

@@ -209,11 +209,16 @@ pub fn build(all: bool) -> Result<Built> {
     Ok(Built { host, cross, mac_universal: Some(universal) })
 }
 
-/// `cargo rustc --release --lib --crate-type cdylib`; returns the cdylib. The crate type is
-/// given here, not in Cargo.toml, so that the cdylib is the unit's only crate type and gets
-/// the release profile's LTO.
+/// The arguments of Cargo that build the FMU's binary: `rustc --release --lib --crate-type
+/// cdylib`, without the default features (the study code, which an FMU does not use). The
+/// crate type is given here, not in Cargo.toml, so that the cdylib is the unit's only crate
+/// type and gets the release profile's LTO.
+const CDYLIB: [&str; 6] =
+    ["rustc", "--release", "--lib", "--no-default-features", "--crate-type", "cdylib"];
+
+/// Builds the host's cdylib ([`CDYLIB`]) and returns it.
 fn build_host() -> Result<PathBuf> {
-    run_cmd(&mut cargo(["rustc", "--release", "--lib", "--crate-type", "cdylib"]))?;
+    run_cmd(&mut cargo(CDYLIB))?;
     let name = if cfg!(windows) {
         "beam_body.dll"
     } else if cfg!(target_os = "macos") {
@@ -236,9 +241,7 @@ fn existing(path: PathBuf) -> Result<PathBuf> {
 fn build_cross(target: Cross, sdk: &Path) -> Result<PathBuf> {
     let started = Instant::now();
     let mut cmd = debian_cargo(target, sdk)?;
-    cmd.args(["rustc", "--release", "--lib", "--crate-type", "cdylib", "--target"])
-        .arg(target.triple())
-        .arg("-Zbuild-std=std,panic_unwind");
+    cmd.args(CDYLIB).arg("--target").arg(target.triple()).arg("-Zbuild-std=std,panic_unwind");
     run_cmd(&mut cmd)?;
     let out = cross_dir().join(target.triple()).join("release").join(target.output());
     let out = existing(out)?;

@@ -1,0 +1,404 @@
+"""Runs a study in chunks, on this machine or on a Dask cluster, and writes its table.
+
+The study is cut into chunks of consecutive cases. Each chunk is one call of the native
+runner, `beam-body study STUDY --cases A..B`, which writes CSV; its rows depend only on the
+case numbers, so the chunks can run anywhere, in any order. Finished chunks are kept in a
+work directory beside the output (`OUT.parts/`), each written atomically under its chunk
+number: a re-run computes only the chunks that are missing, and a chunk computed twice (a
+worker that died after finishing it) is still one file. The table is assembled from the
+chunks, checked (every case once, in order), and written as Parquet or CSV.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import worker
+
+#: The default number of cases per chunk, and the least number of chunks (for the balance
+#: of the load between workers and for what an interruption loses).
+CHUNK_CASES = 1000
+MIN_CHUNKS = 16
+
+
+class StudyError(Exception):
+    """An error the user can act on: printed as `error: ...`, exit status 2."""
+
+
+def default_cli() -> str:
+    """$BEAM_BODY_BIN, else target/release/beam-body of this checkout, else beam-body on PATH."""
+    env = os.environ.get("BEAM_BODY_BIN")
+    if env:
+        return env
+    local = Path(__file__).resolve().parents[2] / "target" / "release" / "beam-body"
+    if local.is_file():
+        return str(local)
+    found = shutil.which("beam-body")
+    if found:
+        return found
+    raise StudyError(
+        "the beam-body CLI was not found: build it (cargo build --release), put it on PATH, "
+        "or pass --cli PATH"
+    )
+
+
+@dataclass
+class Plan:
+    """A checked study: what `beam-body study --plan` says of it, and its texts."""
+
+    path: Path
+    cli: str
+    cli_sha256: str
+    cases: int
+    columns: list
+    parameters: list
+    metrics: list
+    study_text: str
+    scene_text: str | None
+
+    def spec(self) -> dict:
+        """What a worker needs to run a chunk (see worker.run_chunk)."""
+        return {
+            "cli": self.cli,
+            "cli_sha256": self.cli_sha256,
+            "study_text": self.study_text,
+            "scene_text": self.scene_text,
+        }
+
+    def fingerprint(self, chunk_size: int) -> str:
+        """Changes with the study, its scene, the binary and the chunking."""
+        h = hashlib.sha256()
+        for part in (self.study_text, self.scene_text or "", self.cli_sha256, str(chunk_size)):
+            h.update(part.encode())
+            h.update(b"\0")
+        return h.hexdigest()
+
+
+def plan(study: str | Path, cli: str | None = None) -> Plan:
+    """Checks the study with the CLI (nothing runs) and reads what a run needs."""
+    cli = os.path.abspath(cli or default_cli())
+    if not os.path.isfile(cli):
+        raise StudyError(f"the beam-body CLI {cli} does not exist")
+    path = Path(study)
+    proc = subprocess.run([cli, "study", str(path), "--plan"], capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise StudyError(proc.stderr.strip().removeprefix("error: "))
+    info = json.loads(proc.stdout)
+    scene_text = Path(info["scene"]).read_text(encoding="utf-8") if info["scene"] else None
+    return Plan(
+        path=path,
+        cli=cli,
+        cli_sha256=worker.file_sha256(cli),
+        cases=info["cases"],
+        columns=info["columns"],
+        parameters=info["parameters"],
+        metrics=info["metrics"],
+        study_text=path.read_text(encoding="utf-8"),
+        scene_text=scene_text,
+    )
+
+
+def default_chunk_size(cases: int) -> int:
+    """About CHUNK_CASES cases per chunk, but at least MIN_CHUNKS chunks (and 1 case)."""
+    return max(1, min(CHUNK_CASES, math.ceil(cases / MIN_CHUNKS)))
+
+
+class WorkDir:
+    """The finished chunks of one study: `chunk-NNNNNN.csv` and its `.json` (who computed it)."""
+
+    def __init__(self, path: Path, plan: Plan, chunk_size: int, restart: bool):
+        self.path = path
+        self.chunk_size = chunk_size
+        self.cases = plan.cases
+        self.chunks = math.ceil(plan.cases / chunk_size) if plan.cases else 0
+        fingerprint = plan.fingerprint(chunk_size)
+        manifest = path / "manifest.json"
+        if manifest.exists() and not restart:
+            old = json.loads(manifest.read_text())
+            if old.get("fingerprint") != fingerprint:
+                what = (
+                    f"chunks of {old.get('chunk_size')} cases"
+                    if old.get("chunk_size") != chunk_size
+                    else "another study, scene or beam-body build"
+                )
+                raise StudyError(
+                    f"{path} holds the chunks of {what}: pass --restart to discard them, "
+                    f"or another --work-dir"
+                )
+        if restart and path.exists():
+            shutil.rmtree(path)
+        path.mkdir(parents=True, exist_ok=True)
+        for stale in path.glob("*.tmp-*"):  # left by an interrupted write
+            stale.unlink()
+        if not manifest.exists():
+            atomic_write(
+                manifest,
+                json.dumps(
+                    {
+                        "fingerprint": fingerprint,
+                        "study": str(plan.path),
+                        "cases": plan.cases,
+                        "chunk_size": chunk_size,
+                        "chunks": self.chunks,
+                        "cli_sha256": plan.cli_sha256,
+                    },
+                    indent=1,
+                ).encode(),
+            )
+
+    def bounds(self, k: int) -> tuple:
+        return k * self.chunk_size, min((k + 1) * self.chunk_size, self.cases)
+
+    def csv(self, k: int) -> Path:
+        return self.path / f"chunk-{k:06d}.csv"
+
+    def done(self) -> set:
+        return {k for k in range(self.chunks) if self.csv(k).exists()}
+
+    def save(self, k: int, result: dict) -> None:
+        """Stores a chunk's rows after checking that they are its cases; the same rows
+        again (a chunk computed twice) replace the file with identical bytes."""
+        data = result["csv"]
+        start, stop = self.bounds(k)
+        lines = data.decode().splitlines()
+        cases = [int(line.split(",", 1)[0]) for line in lines[1:] if line]
+        if cases != list(range(start, stop)):
+            raise StudyError(f"chunk {k}: the rows are not cases {start}..{stop}")
+        info = {key: result[key] for key in ("worker", "host", "seconds")}
+        atomic_write(self.path / f"chunk-{k:06d}.json", json.dumps(info).encode())
+        atomic_write(self.csv(k), data)
+
+
+def atomic_write(path: Path, data: bytes) -> None:
+    """Writes a file whole or not at all: a temporary file in the same directory, renamed."""
+    tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+class Progress:
+    """Chunks and cases done, the rate and the time left, on stderr."""
+
+    def __init__(self, total_cases: int, chunks: int, skipped: int, quiet: bool):
+        self.total, self.chunks, self.quiet = total_cases, chunks, quiet
+        self.skipped_chunks = skipped
+        self.start = time.perf_counter()
+        self.done_cases = 0
+        self.done_chunks = 0
+        self.terminal = sys.stderr.isatty()
+        self.last = 0.0
+
+    def add(self, cases: int, final: bool = False) -> None:
+        self.done_cases += cases
+        self.done_chunks += 1
+        now = time.perf_counter()
+        if self.quiet or (not final and now - self.last < (0.25 if self.terminal else 5.0)):
+            return
+        self.last = now
+        secs = max(now - self.start, 1e-9)
+        rate = self.done_cases / secs
+        left = self.total - self.done_cases
+        eta = f"{left / rate:.0f} s left" if rate > 0 else ""
+        line = (
+            f"study: {self.done_chunks + self.skipped_chunks}/{self.chunks} chunks, "
+            f"{self.done_cases} of {self.total} cases to compute, {rate:.0f} cases/s, {eta}"
+        )
+        print(("\r" + line + "\x1b[K") if self.terminal else line, end="" if self.terminal else "\n",
+              file=sys.stderr, flush=True)
+
+    def finish(self) -> None:
+        if self.terminal and not self.quiet and self.last:
+            print(file=sys.stderr)
+
+
+def run_local(plan: Plan, work: WorkDir, todo: list, threads: int | None, progress: Progress):
+    """Each chunk as one call of the CLI on every core (or `threads`), one after another."""
+    threads = threads or os.cpu_count() or 1
+    spec = plan.spec()
+    for k in todo:
+        start, stop = work.bounds(k)
+        result = worker.run_chunk(spec, k, start, stop, threads=threads)
+        work.save(k, result)
+        progress.add(stop - start)
+
+
+class ByValue:
+    """A function that the standard pickle sends by value: as a call of cloudpickle.loads on
+    cloudpickle's bytes of it, which any process with distributed (and so cloudpickle) can
+    load. Loading gives the function itself."""
+
+    def __init__(self, fn):
+        import cloudpickle
+
+        self.fn = fn
+        self.blob = cloudpickle.dumps(fn)
+
+    def __reduce__(self):
+        import cloudpickle
+
+        return (cloudpickle.loads, (self.blob,))
+
+    def __call__(self, *args, **kwargs):
+        return self.fn(*args, **kwargs)
+
+
+def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, workers: int | None,
+             progress: Progress) -> list:
+    """Each chunk as one task on a Dask cluster: a LocalCluster of single-threaded worker
+    processes (one per core, or `workers`), or the scheduler at `scheduler`. The client writes
+    each chunk as its result arrives. Returns the errors of the chunks that failed."""
+    import cloudpickle
+    from distributed import Client, LocalCluster, as_completed
+
+    # The task function travels by value: the scheduler and the workers need no copy of this
+    # package. (distributed pickles a task graph with the standard pickle, which sends
+    # functions by reference, whatever cloudpickle's by-value registry holds; see ByValue.)
+    cloudpickle.register_pickle_by_value(worker)
+    task = ByValue(worker.run_chunk)
+    cluster = None
+    if scheduler:
+        client = Client(scheduler, timeout="30s")
+    else:
+        n = workers or os.cpu_count() or 1
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        client = Client(cluster)
+    errors = []
+    try:
+        # The spec goes with every task (a few kB): a task moved to another worker after a
+        # death needs nothing that died with the first.
+        spec = plan.spec()
+        tag = plan.fingerprint(work.chunk_size)[:16]
+        futures = {}
+        for k in todo:
+            start, stop = work.bounds(k)
+            fut = client.submit(task, spec, k, start, stop,
+                                key=f"beam-body-{tag}-chunk-{k}", pure=False)
+            futures[fut] = k
+        for fut in as_completed(futures):
+            k = futures[fut]
+            try:
+                result = fut.result()
+            except Exception as e:  # noqa: BLE001: a chunk's failure is reported, not fatal
+                errors.append(f"chunk {k}: {e}")
+                continue
+            finally:
+                fut.release()
+            work.save(k, result)
+            start, stop = work.bounds(k)
+            progress.add(stop - start)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return errors
+
+
+def schema(plan: Plan):
+    import pyarrow as pa
+
+    types = {"int64": pa.int64(), "float64": pa.float64(), "string": pa.string()}
+    return pa.schema([(c["name"], types[c["type"]]) for c in plan.columns])
+
+
+def assemble(plan: Plan, work: WorkDir):
+    """The table of every chunk, in case order; checks that it holds each case once."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    sch = schema(plan)
+    convert = pacsv.ConvertOptions(column_types=sch, strings_can_be_null=False,
+                                   quoted_strings_can_be_null=False)
+    parts = [pacsv.read_csv(work.csv(k), convert_options=convert) for k in range(work.chunks)]
+    table = pa.concat_tables(parts) if parts else sch.empty_table()
+    case = table.column("case").to_numpy()
+    if not np.array_equal(case, np.arange(plan.cases)):
+        raise StudyError(f"the chunks in {work.path} do not hold cases 0..{plan.cases} once each")
+    meta = {
+        b"beam_body.study": plan.study_text.encode(),
+        b"beam_body.scene": (plan.scene_text or "").encode(),
+        b"beam_body.cli_sha256": plan.cli_sha256.encode(),
+    }
+    return table.replace_schema_metadata(meta)
+
+
+def write_table(table, out: Path, fmt: str) -> None:
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    tmp = out.with_name(f"{out.name}.tmp-{os.getpid()}")
+    if fmt == "parquet":
+        pq.write_table(table, tmp)
+    else:
+        pacsv.write_csv(table, tmp)
+    os.replace(tmp, out)
+
+
+def run_study(study, out, *, engine="local", scheduler=None, workers=None, threads=None,
+              chunk_size=None, work_dir=None, restart=False, cli=None, fmt=None, quiet=False):
+    """Runs a study and writes its table to `out`. Returns a summary dict."""
+    p = plan(study, cli)
+    out = Path(out)
+    fmt = fmt or ("csv" if out.suffix.lower() == ".csv" else "parquet")
+    if fmt not in ("parquet", "csv"):
+        raise StudyError(f"--format {fmt}: must be parquet or csv")
+    size = chunk_size or default_chunk_size(p.cases)
+    if size < 1:
+        raise StudyError(f"--chunk-size {size}: must be at least 1")
+    work = WorkDir(Path(work_dir) if work_dir else out.with_name(out.name + ".parts"), p, size,
+                   restart)
+    done = work.done()
+    todo = [k for k in range(work.chunks) if k not in done]
+    if not quiet:
+        print(f"study: {p.cases} cases in {work.chunks} chunks of {size}; {len(done)} done "
+              f"already in {work.path}, {len(todo)} to compute ({engine})", file=sys.stderr)
+    todo_cases = sum(work.bounds(k)[1] - work.bounds(k)[0] for k in todo)
+    progress = Progress(todo_cases, work.chunks, len(done), quiet)
+    began = time.perf_counter()
+    errors = []
+    if engine == "local":
+        run_local(p, work, todo, threads, progress)
+    elif engine == "dask":
+        errors = run_dask(p, work, todo, scheduler, workers, progress)
+    else:
+        raise StudyError(f"--engine {engine}: must be local or dask")
+    progress.finish()
+    seconds = time.perf_counter() - began
+    if errors:
+        raise StudyError(
+            f"{len(errors)} of {len(todo)} chunks failed (the others are kept in {work.path}; "
+            "run again to retry):\n  " + "\n  ".join(errors)
+        )
+    table = assemble(p, work)
+    write_table(table, out, fmt)
+    statuses = {}
+    for s in table.column("status").to_pylist():
+        statuses[s] = statuses.get(s, 0) + 1
+    summary = {
+        "cases": p.cases,
+        "chunks": work.chunks,
+        "computed_chunks": len(todo),
+        "computed_cases": todo_cases,
+        "seconds": seconds,
+        "statuses": statuses,
+        "output": str(out),
+    }
+    if not quiet:
+        rate = f", {todo_cases / seconds:.0f} cases/s" if todo_cases and seconds > 0 else ""
+        counts = ", ".join(f"{k} {v}" for k, v in sorted(statuses.items()))
+        print(f"study: computed {len(todo)} chunks ({todo_cases} cases) in {seconds:.2f} s{rate}; "
+              f"{counts}; wrote {out}", file=sys.stderr)
+    return summary

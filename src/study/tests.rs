@@ -1,0 +1,281 @@
+use super::*;
+
+fn parse(text: &str) -> Result<Study, String> {
+    Study::parse(text, |path| Err(format!("no scene files in these tests ({path})")))
+}
+
+const MAP: &str = r#"
+metrics = ["residual_v1", "peak_M"]
+[set]
+t_end = 3.0
+dt_out = 0.01
+[parameters.t_rot]
+start = 0.5
+stop = 1.5
+count = 3
+[parameters.M2]
+values = [6, 12]
+"#;
+
+#[test]
+fn a_grid_study_numbers_its_cases_with_the_first_parameter_slowest() {
+    let study = parse(MAP).unwrap();
+    assert_eq!(study.cases(), 6);
+    let all: Vec<Vec<f64>> = (0..6).map(|c| study.values(c)).collect();
+    assert_eq!(
+        all,
+        [[0.5, 6.0], [0.5, 12.0], [1.0, 6.0], [1.0, 12.0], [1.5, 6.0], [1.5, 12.0]]
+            .map(|r| r.to_vec())
+    );
+    let names: Vec<_> = study.columns().into_iter().map(|(n, _)| n).collect();
+    assert_eq!(
+        names,
+        ["case", "t_rot", "M2", "residual_v1", "peak_M", "status", "message", "steps"]
+    );
+}
+
+#[test]
+fn a_case_runs_as_the_scene_with_its_values() {
+    let study = parse(MAP).unwrap();
+    let row = study.run_case(3);
+    assert_eq!(row.status, Status::Ok, "{}", row.message);
+    assert_eq!(row.values, [1.0, 12.0]);
+    // The same run by hand.
+    let mut scene = Scene::default();
+    for (k, v) in [("t_end", 3.0), ("dt_out", 0.01), ("t_rot", 1.0), ("M2", 12.0)] {
+        scene.set_number(k, v).unwrap();
+    }
+    let (mut residual, mut peak_m) = (0.0f64, 0.0f64);
+    let report = crate::sim::simulate(&scene, |o| {
+        peak_m = peak_m.max(o.reactions.m.abs());
+        if o.t >= 1.0 {
+            residual = residual.max(o.v1.abs()); // v1_eq = 0 at φ = π
+        }
+    })
+    .unwrap();
+    assert!((row.metrics[0].unwrap() - residual).abs() < 1e-15, "{row:?} {residual}");
+    assert_eq!(row.metrics[1], Some(peak_m));
+    assert_eq!(row.steps, report.stats.steps);
+    assert!(residual > 1e-3 && peak_m > 1.0);
+}
+
+#[test]
+fn residual_vibration_is_measured_from_the_static_deflection_at_the_final_angle() {
+    // A turn to π/2: the beam ends bent under the body's weight.
+    let study = parse(
+        r#"
+metrics = ["residual_v1", "max_v1"]
+[set]
+t_end = 2.0
+phi_end = 1.5707963267948966
+t_rot = 0.85
+[parameters.M2]
+values = [12]
+"#,
+    )
+    .unwrap();
+    let row = study.run_case(0);
+    let model = BeamBody::new(crate::model::Params::default()).unwrap();
+    let v1_eq = model.equilibrium(std::f64::consts::FRAC_PI_2, false).0;
+    assert!(v1_eq < -0.1, "{v1_eq}");
+    let (residual, max_v1) = (row.metrics[0].unwrap(), row.metrics[1].unwrap());
+    // The vibration about the bent state is smaller than the deflection itself.
+    assert!(residual < max_v1 && max_v1 > 0.1, "{residual} {max_v1}");
+    // The equilibrium agrees with the modes' computation.
+    assert_eq!(model.modes(std::f64::consts::FRAC_PI_2).equilibrium.0, v1_eq);
+}
+
+#[test]
+fn latin_hypercube_samples_fill_every_stratum_of_each_distribution() {
+    let study = parse(
+        r#"
+metrics = ["peak_M"]
+[sampling]
+samples = 400
+seed = 7
+[parameters.EI]
+distribution = "normal"
+mean = 1000
+sd = 100
+min = 500
+[parameters.M2]
+distribution = "uniform"
+low = 6
+high = 24
+[parameters.J_C]
+distribution = "lognormal"
+mean = 1.0
+sd = 0.2
+"#,
+    )
+    .unwrap();
+    assert_eq!(study.cases(), 400);
+    let n = 400.0;
+    let mut strata = [vec![0; 400], vec![0; 400], vec![0; 400]];
+    let (mu, sigma) = lognormal_mu_sigma(1.0, 0.2);
+    let lo = normal_cdf(-5.0);
+    for c in 0..400 {
+        let v = study.values(c);
+        let u = [
+            (normal_cdf((v[0] - 1000.0) / 100.0) - lo) / (1.0 - lo),
+            (v[1] - 6.0) / 18.0,
+            normal_cdf((crate::math::ln(v[2]) - mu) / sigma),
+        ];
+        for (j, u) in u.into_iter().enumerate() {
+            strata[j][((u * n) as usize).min(399)] += 1;
+        }
+    }
+    for s in &strata {
+        assert!(s.iter().all(|&k| k == 1), "{s:?}");
+    }
+    // Mean and standard deviation of the log-normal column (LHS: close to the exact ones).
+    let col: Vec<f64> = (0..400).map(|c| study.values(c)[2]).collect();
+    let mean = col.iter().sum::<f64>() / n;
+    let sd = (col.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)).sqrt();
+    assert!((mean - 1.0).abs() < 2e-3 && (sd - 0.2).abs() < 1e-2, "{mean} {sd}");
+}
+
+#[test]
+fn a_chunk_gives_the_rows_of_the_whole_study() {
+    let text = r#"
+metrics = ["max_v1"]
+[set]
+t_end = 0.5
+[sampling]
+samples = 5
+seed = 3
+[parameters.t_rot]
+values = [0.3, 0.4]
+[parameters.EI]
+distribution = "uniform"
+low = 900
+high = 1100
+"#;
+    let study = parse(text).unwrap();
+    assert_eq!(study.cases(), 10);
+    let mut whole = Vec::new();
+    run_cases(
+        &study,
+        0..10,
+        3,
+        |_| {},
+        |r| {
+            whole.push(r);
+            Ok::<_, ()>(())
+        },
+    )
+    .unwrap();
+    assert_eq!(whole.iter().map(|r| r.case).collect::<Vec<_>>(), (0..10).collect::<Vec<_>>());
+    let mut chunk = Vec::new();
+    run_cases(
+        &study,
+        4..7,
+        1,
+        |_| {},
+        |r| {
+            chunk.push(r);
+            Ok::<_, ()>(())
+        },
+    )
+    .unwrap();
+    assert_eq!(chunk, whole[4..7]);
+    // The same 5 EI samples at each grid point.
+    assert_eq!(whole[1].values[1], whole[6].values[1]);
+    assert_ne!(whole[1].values[1], whole[2].values[1]);
+}
+
+#[test]
+fn the_runner_stops_at_the_first_error_of_the_sink() {
+    let study = parse(MAP).unwrap();
+    let mut seen = 0;
+    let result = run_cases(
+        &study,
+        0..6,
+        2,
+        |_| {},
+        |_| {
+            seen += 1;
+            if seen == 2 {
+                Err("disk full")
+            } else {
+                Ok(())
+            }
+        },
+    );
+    assert_eq!(result, Err("disk full"));
+    assert_eq!(seen, 2);
+}
+
+#[test]
+fn a_case_that_leaves_the_range_of_validity_is_a_row_not_an_error() {
+    // A soft beam: the tip section's rotation leaves the model's range.
+    let study = parse(
+        r#"
+metrics = ["peak_M", "max_v1"]
+[set]
+t_end = 2.0
+[parameters.EI]
+values = [1000, 20]
+"#,
+    )
+    .unwrap();
+    let ok = study.run_case(0);
+    assert_eq!(ok.status, Status::Ok, "{}", ok.message);
+    let bad = study.run_case(1);
+    assert_eq!(bad.status, Status::Stopped, "{bad:?}");
+    assert!(bad.message.contains("range"), "{}", bad.message);
+    assert_eq!(bad.metrics, [None, None]);
+    assert!(bad.steps > 0);
+}
+
+#[test]
+fn bad_study_files_name_the_field() {
+    let cases = [
+        ("[parameters.foo]\nvalues = [1]", "`parameters.foo`: unknown parameter"),
+        ("[parameters.M2]\nstart = -1\nstop = 10\ncount = 3", "`parameters.M2.start`"),
+        ("[parameters.M2]\nstart = 1\nstop = 10\ncount = 0", "`parameters.M2.count` = 0"),
+        ("[parameters.M2]\nstart = 1\nstop = 10\ncout = 3", "`parameters.M2.cout`: unknown key"),
+        (
+            "[sampling]\nsamples = 10\nseed = 1\n[parameters.EI]\ndistribution = \"normal\"\nmean = 1000\nsd = 100",
+            "`parameters.EI`: the distribution is unbounded below",
+        ),
+        (
+            "[sampling]\nsamples = 0\nseed = 1\n[parameters.EI]\ndistribution = \"uniform\"\nlow = 1\nhigh = 2",
+            "`sampling.samples` = 0",
+        ),
+        ("[parameters.EI]\ndistribution = \"uniform\"\nlow = 1\nhigh = 2", "`sampling` is missing"),
+        ("[parameters.M2]\nstart = 1\nstop = 10\ncount = 3\nspacing = \"cubic\"", "`parameters.M2.spacing`"),
+        ("metrics = [\"peak_Q\"]", "`metrics[0]`: unknown metric `peak_Q`"),
+        ("[set]\nt_end = 0", "`set.t_end`"),
+        ("[set]\nM2 = 3\n[parameters.M2]\nvalues = [1]", "`parameters.M2`: `M2` is also fixed"),
+        ("[parameters.t_rot]\nvalues = [0.5, 20]", "`parameters.t_rot` reaches 20"),
+        ("rtol = 2", "`rtol`"),
+        ("scene = \"x.toml\"", "`scene`: no scene files"),
+        ("sceen = \"x.toml\"", "`sceen`: unknown key"),
+        ("[parameters.M2]\nvalues = [1, \"a\"]", "`parameters.M2.values[1]`: must be a number"),
+        ("[parameters.l]\nstart = 0\nstop = 2\ncount = 3\nspacing = \"log\"", "log grid"),
+        ("x = ", "not a valid TOML file"),
+    ];
+    for (text, want) in cases {
+        let e = parse(text).unwrap_err();
+        assert!(e.contains(want), "{text:?}\n  gave: {e}\n  want: {want}");
+    }
+}
+
+#[test]
+fn the_scene_file_comes_first_and_the_study_overrides_it() {
+    let study = Study::parse("rtol = 1e-8\n[set]\nt_end = 4.0\n", |path| {
+        assert_eq!(path, "base.toml");
+        Ok("t_end = 2.0\nM2 = 20\n".into())
+    });
+    // No `scene` key: the loader is not called.
+    let study = study.unwrap();
+    assert_eq!(study.base.t_end, 4.0);
+    let study = Study::parse("scene = \"base.toml\"\nrtol = 1e-8\n[set]\nt_end = 4.0\n", |path| {
+        assert_eq!(path, "base.toml");
+        Ok("t_end = 2.0\nM2 = 20\n".into())
+    })
+    .unwrap();
+    assert_eq!((study.base.t_end, study.base.params.m2, study.base.solver.rtol), (4.0, 20.0, 1e-8));
+    assert_eq!(study.scene_path(), Some("base.toml"));
+}
