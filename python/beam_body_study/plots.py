@@ -73,11 +73,13 @@ def heatmap(table, x: str, y: str, z: str, out: str | Path, contour: list | None
         ax.legend(loc="upper right", fontsize=8)
     if contour:
         cs = ax.contour(xs, ys, grid, levels=sorted(contour), colors="white", linewidths=1.4)
-        ax.clabel(cs, fmt=lambda v: f"{z} = {v:g}", fontsize=8)
+        unit = UNITS.get(z, "")
+        ax.clabel(cs, fmt=lambda v: f"{v:g} {unit}".strip(), fontsize=8)
     ax.set_xlabel(label(x))
     ax.set_ylabel(label(y))
     ax.set_title(title or f"{z} over {x} × {y} ({table.num_rows} runs)")
     fig.tight_layout()
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out)
     plt.close(fig)
     return {"nx": len(xs), "ny": len(ys), "failed": int(failed.sum())}
@@ -109,6 +111,7 @@ def histogram(table, metric: str, out: str | Path, quantiles=(0.5, 0.99), bins: 
     ax.set_title(title or f"{metric}: {len(values)} runs{note}")
     ax.legend(fontsize=8)
     fig.tight_layout()
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out)
     plt.close(fig)
     return {"quantiles": qs, "missing": missing, "n": len(values)}

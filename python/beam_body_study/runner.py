@@ -136,6 +136,9 @@ class WorkDir:
                 )
         if restart and path.exists():
             shutil.rmtree(path)
+        elif not manifest.exists() and any(path.glob("chunk-*.csv")):
+            raise StudyError(f"{path} holds chunk files but no manifest.json: pass --restart to "
+                             "discard them, or another --work-dir")
         path.mkdir(parents=True, exist_ok=True)
         for stale in path.glob("*.tmp-*"):  # left by an interrupted write
             stale.unlink()
@@ -174,17 +177,20 @@ class WorkDir:
         if cases != list(range(start, stop)):
             raise StudyError(f"chunk {k}: the rows are not cases {start}..{stop}")
         info = {key: result[key] for key in ("worker", "host", "seconds")}
-        atomic_write(self.path / f"chunk-{k:06d}.json", json.dumps(info).encode())
+        atomic_write(self.path / f"chunk-{k:06d}.json", json.dumps(info).encode(), durable=False)
         atomic_write(self.csv(k), data)
 
 
-def atomic_write(path: Path, data: bytes) -> None:
-    """Writes a file whole or not at all: a temporary file in the same directory, renamed."""
+def atomic_write(path: Path, data: bytes, durable: bool = True) -> None:
+    """Writes a file whole or not at all: a temporary file in the same directory, renamed.
+    `durable` flushes it to the disk before the rename, so that a power cut cannot leave the
+    new name on an empty file (2 ms here; the chunks' rows need it, their notes do not)."""
     tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
     with open(tmp, "wb") as f:
         f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
+        if durable:
+            f.flush()
+            os.fsync(f.fileno())
     os.replace(tmp, path)
 
 
@@ -199,6 +205,8 @@ class Progress:
         self.done_chunks = 0
         self.terminal = sys.stderr.isatty()
         self.last = 0.0
+        #: Seconds to start the cluster and connect to it (the Dask engine).
+        self.startup = 0.0
 
     def add(self, cases: int, final: bool = False) -> None:
         self.done_cases += cases
@@ -255,9 +263,10 @@ class ByValue:
 
 
 def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, workers: int | None,
-             progress: Progress) -> list:
-    """Each chunk as one task on a Dask cluster: a LocalCluster of single-threaded worker
-    processes (one per core, or `workers`), or the scheduler at `scheduler`. The client writes
+             progress: Progress, local_processes: bool = False) -> list:
+    """Each chunk as one task on a Dask cluster: a LocalCluster of `workers` single-threaded
+    workers (default: one per core; threads of this process, or processes with
+    `local_processes`), or the scheduler at `scheduler`. The client writes
     each chunk as its result arrives. Returns the errors of the chunks that failed."""
     import cloudpickle
     from distributed import Client, LocalCluster, as_completed
@@ -268,13 +277,18 @@ def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, worke
     cloudpickle.register_pickle_by_value(worker)
     task = ByValue(worker.run_chunk)
     cluster = None
+    began = time.perf_counter()
     if scheduler:
         client = Client(scheduler, timeout="30s")
     else:
+        # Workers as threads of this process by default: a task spends its time waiting for
+        # the CLI's process, so worker processes would only add interpreters competing for
+        # the cores (docs/study.md measures both).
         n = workers or os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=local_processes,
+                               dashboard_address=":0")  # a free port: 8787 may be taken
         client = Client(cluster)
+    progress.startup = time.perf_counter() - began
     errors = []
     try:
         # The spec goes with every task (a few kB): a task moved to another worker after a
@@ -313,45 +327,56 @@ def schema(plan: Plan):
     return pa.schema([(c["name"], types[c["type"]]) for c in plan.columns])
 
 
-def assemble(plan: Plan, work: WorkDir):
-    """The table of every chunk, in case order; checks that it holds each case once."""
+def assemble(plan: Plan, work: WorkDir, out: Path, fmt: str) -> dict:
+    """Writes the table of every chunk, in case order, to `out` (whole or not at all), one
+    chunk at a time: a study of 10⁷ rows never sits in memory. Checks that the chunks hold
+    each case once, in order. Returns the count of each status."""
     import numpy as np
-    import pyarrow as pa
     import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
 
-    sch = schema(plan)
-    convert = pacsv.ConvertOptions(column_types=sch, strings_can_be_null=False,
-                                   quoted_strings_can_be_null=False)
-    parts = [pacsv.read_csv(work.csv(k), convert_options=convert) for k in range(work.chunks)]
-    table = pa.concat_tables(parts) if parts else sch.empty_table()
-    case = table.column("case").to_numpy()
-    if not np.array_equal(case, np.arange(plan.cases)):
-        raise StudyError(f"the chunks in {work.path} do not hold cases 0..{plan.cases} once each")
     meta = {
         b"beam_body.study": plan.study_text.encode(),
         b"beam_body.scene": (plan.scene_text or "").encode(),
         b"beam_body.cli_sha256": plan.cli_sha256.encode(),
     }
-    return table.replace_schema_metadata(meta)
-
-
-def write_table(table, out: Path, fmt: str) -> None:
-    import pyarrow.csv as pacsv
-    import pyarrow.parquet as pq
-
+    sch = schema(plan).with_metadata(meta)
+    convert = pacsv.ConvertOptions(column_types=sch, strings_can_be_null=False,
+                                   quoted_strings_can_be_null=False)
     tmp = out.with_name(f"{out.name}.tmp-{os.getpid()}")
-    if fmt == "parquet":
-        pq.write_table(table, tmp)
-    else:
-        pacsv.write_csv(table, tmp)
+    writer = pq.ParquetWriter(tmp, sch) if fmt == "parquet" else pacsv.CSVWriter(tmp, sch)
+    statuses: dict = {}
+    try:
+        for k in range(work.chunks):
+            part = pacsv.read_csv(work.csv(k), convert_options=convert)
+            start, stop = work.bounds(k)
+            if not np.array_equal(part.column("case").to_numpy(), np.arange(start, stop)):
+                raise StudyError(f"{work.csv(k)} does not hold cases {start}..{stop}")
+            for status in part.column("status").to_pylist():
+                statuses[status] = statuses.get(status, 0) + 1
+            writer.write_table(part.replace_schema_metadata(meta))
+        if work.chunks == 0:
+            writer.write_table(sch.empty_table())
+        writer.close()
+    except BaseException:
+        writer.close()
+        tmp.unlink(missing_ok=True)
+        raise
     os.replace(tmp, out)
+    return statuses
 
 
 def run_study(study, out, *, engine="local", scheduler=None, workers=None, threads=None,
-              chunk_size=None, work_dir=None, restart=False, cli=None, fmt=None, quiet=False):
-    """Runs a study and writes its table to `out`. Returns a summary dict."""
+              chunk_size=None, work_dir=None, restart=False, cli=None, fmt=None, quiet=False,
+              local_processes=False):
+    """Runs a study and writes its table to `out`. Returns a summary dict.
+
+    With `engine="dask"` and no scheduler, a script that calls this must guard its top level
+    with `if __name__ == "__main__":` when `local_processes` is set: the workers' processes are
+    started by multiprocessing's spawn, which imports the script again."""
     p = plan(study, cli)
     out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
     fmt = fmt or ("csv" if out.suffix.lower() == ".csv" else "parquet")
     if fmt not in ("parquet", "csv"):
         raise StudyError(f"--format {fmt}: must be parquet or csv")
@@ -372,7 +397,7 @@ def run_study(study, out, *, engine="local", scheduler=None, workers=None, threa
     if engine == "local":
         run_local(p, work, todo, threads, progress)
     elif engine == "dask":
-        errors = run_dask(p, work, todo, scheduler, workers, progress)
+        errors = run_dask(p, work, todo, scheduler, workers, progress, local_processes)
     else:
         raise StudyError(f"--engine {engine}: must be local or dask")
     progress.finish()
@@ -382,23 +407,22 @@ def run_study(study, out, *, engine="local", scheduler=None, workers=None, threa
             f"{len(errors)} of {len(todo)} chunks failed (the others are kept in {work.path}; "
             "run again to retry):\n  " + "\n  ".join(errors)
         )
-    table = assemble(p, work)
-    write_table(table, out, fmt)
-    statuses = {}
-    for s in table.column("status").to_pylist():
-        statuses[s] = statuses.get(s, 0) + 1
+    statuses = assemble(p, work, out, fmt)
     summary = {
         "cases": p.cases,
         "chunks": work.chunks,
         "computed_chunks": len(todo),
         "computed_cases": todo_cases,
         "seconds": seconds,
+        "startup_seconds": progress.startup,
         "statuses": statuses,
         "output": str(out),
     }
     if not quiet:
         rate = f", {todo_cases / seconds:.0f} cases/s" if todo_cases and seconds > 0 else ""
         counts = ", ".join(f"{k} {v}" for k, v in sorted(statuses.items()))
-        print(f"study: computed {len(todo)} chunks ({todo_cases} cases) in {seconds:.2f} s{rate}; "
-              f"{counts}; wrote {out}", file=sys.stderr)
+        startup = f" (of which {progress.startup:.2f} s to start the cluster or connect)" \
+            if engine == "dask" else ""
+        print(f"study: computed {len(todo)} chunks ({todo_cases} cases) in {seconds:.2f} s"
+              f"{startup}{rate}; {counts}; wrote {out}", file=sys.stderr)
     return summary

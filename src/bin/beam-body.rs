@@ -342,6 +342,13 @@ fn parse_study_args(args: &[String]) -> Result<StudyArgs, Usage> {
     if out.file.is_empty() {
         return Err(Usage(format!("study needs a study file\n\n{USAGE}")));
     }
+    if let Some(o) = out.output.as_ref().filter(|o| o.to_ascii_lowercase().ends_with(".parquet")) {
+        return Err(Usage(format!(
+            "-o {o}: beam-body study writes CSV; the study tool writes Parquet: \
+             python -m beam_body_study run {} -o {o} (or cargo xtask study run ...)",
+            out.file
+        )));
+    }
     Ok(out)
 }
 
@@ -360,6 +367,12 @@ fn cmd_study(args: &[String]) -> Result<(), Usage> {
         text
     })
     .map_err(|e| Usage(format!("{}: {e}", a.file)))?;
+    if let (Some(scene), None) = (&a.scene, study.scene_path()) {
+        return Err(Usage(format!(
+            "--scene {scene}: the study {} names no base scene (`scene = \"...\"`) to replace",
+            a.file
+        )));
+    }
     let total = study.cases();
     let (first, end) = a.cases.unwrap_or((0, total));
     if end > total {
@@ -374,13 +387,19 @@ fn cmd_study(args: &[String]) -> Result<(), Usage> {
     let threads =
         a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
 
-    // The rows go to a temporary file beside OUT, renamed to OUT once all are written.
-    let partial = a.output.as_ref().map(|out| format!("{out}.partial-{}", std::process::id()));
-    let sink: Box<dyn Write> = match &partial {
-        Some(path) => Box::new(
+    // The rows go to a temporary file beside OUT, renamed to OUT once all are written; into
+    // OUT directly where it exists and is not a regular file (a device, a pipe).
+    let special = |out: &String| std::fs::metadata(out).is_ok_and(|m| !m.is_file());
+    let partial = a
+        .output
+        .as_ref()
+        .filter(|out| !special(out))
+        .map(|out| format!("{out}.partial-{}", std::process::id()));
+    let sink: Box<dyn Write> = match (&partial, &a.output) {
+        (Some(path), _) | (None, Some(path)) => Box::new(
             std::fs::File::create(path).map_err(|e| Usage(format!("cannot create {path}: {e}")))?,
         ),
-        None => Box::new(io::stdout().lock()),
+        (None, None) => Box::new(io::stdout().lock()),
     };
     let mut out = BufWriter::new(sink);
     let header: Vec<String> = study.columns().into_iter().map(|(name, _)| name).collect();

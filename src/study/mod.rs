@@ -508,7 +508,8 @@ impl Study {
 struct Accumulator {
     v1_eq: f64,
     t_rot: f64,
-    residual: f64,
+    /// `None` until the first output time at or after t_rot.
+    residual: Option<f64>,
     peak_m: f64,
     peak_n: f64,
     peak_p: f64,
@@ -522,7 +523,7 @@ impl Accumulator {
         Self {
             v1_eq,
             t_rot,
-            residual: f64::NAN,
+            residual: None,
             peak_m: 0.0,
             peak_n: 0.0,
             peak_p: 0.0,
@@ -543,15 +544,14 @@ impl Accumulator {
         self.max_theta1 = max(self.max_theta1, o.theta1.abs());
         if o.t >= self.t_rot {
             let d = (o.v1 - self.v1_eq).abs();
-            self.residual =
-                if self.residual.is_nan() && !d.is_nan() { d } else { max(self.residual, d) };
+            self.residual = Some(self.residual.map_or(d, |r| max(r, d)));
         }
         self.energy = o.energy;
     }
 
     fn get(&self, m: Metric) -> f64 {
         match m {
-            Metric::ResidualV1 => self.residual,
+            Metric::ResidualV1 => self.residual.unwrap_or(f64::NAN),
             Metric::PeakM => self.peak_m,
             Metric::PeakN => self.peak_n,
             Metric::PeakP => self.peak_p,

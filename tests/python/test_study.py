@@ -160,10 +160,16 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+#: The longest a scheduler or a worker of the test may live [s].
+LIFETIME = 300
+
+
 def start(cmd, log: Path) -> subprocess.Popen:
-    """A process in its own session, so that it and its children can be killed together."""
+    """A process in its own session, so that it and its children can be killed together, and
+    killed by `timeout` after LIFETIME seconds whatever happens to the test."""
     out = open(log, "wb")
-    return subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, start_new_session=True,
+    return subprocess.Popen(["timeout", "-s", "KILL", str(LIFETIME), *map(str, cmd)], stdout=out,
+                            stderr=subprocess.STDOUT, start_new_session=True,
                             env=dict(os.environ, PYTHONPATH=""))
 
 
@@ -256,7 +262,7 @@ count = 50
         report(f"worker death: {cases} cases in {math.ceil(cases / 100)} chunks of 100 on a "
                f"loopback scheduler with 2 workers; w1 killed (SIGKILL) at {killed_at:.2f} s "
                f"after {by_w1} chunks of its own ({done_before} in all), with chunks {in_flight} "
-               f"in hand; w2 computed those and the remaining {len(chunks_by('w2'))} chunks in "
+               f"in hand; w2 computed those, {len(chunks_by('w2'))} chunks in "
                f"all; study done at {seconds:.2f} s, {table.num_rows} rows, no duplicate, "
                f"identical to the native runner's table")
     finally:

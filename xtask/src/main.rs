@@ -20,6 +20,7 @@ mod model_description;
 mod platforms;
 mod progress;
 mod python;
+mod study;
 mod summary;
 mod sweep;
 mod system;
@@ -111,6 +112,16 @@ Commands:
             by 1e-3 of the scale or more, or (16) from (15) by 0.5 of it or less;
           - draw docs/figure3.png and docs/model.png (xtask/python/figures.py).
           The claims are tested by `cargo test -p xtask figures` (run by `test`).
+  study ARGS...
+          The study tool (python/beam_body_study, README: Design studies) with the
+          release CLI, in target/venv: `study run STUDY.toml -o OUT.parquet [--engine
+          dask [--scheduler ADDRESS]]`, `study plot heatmap|hist ...`, `study --help`.
+  bench-study [--quick]
+          Throughput of the study runners side by side (xtask/python/bench_study.py):
+          a 10^4-case study through the native runner on 1 and 2 threads, the chunked
+          local engine, a LocalCluster of 1 and 2 workers and a loopback scheduler with
+          2 worker processes; the overhead of a chunk's CLI call; 5 shuffled rounds
+          (2 with --quick); target/bench/study.{csv,md}, and docs/study.md in the full run.
   setup   Install what the build and the whole suite need beyond Rust and Python:
           the launcher that `cargo xtask` runs first (xtask/launch) installs
           libclang-dev (bindgen in fmi-sys) when libclang is missing; then the Debian
@@ -169,6 +180,8 @@ fn run(args: &[String]) -> Result {
             no_options(command, options)?;
             figures::run()
         }
+        "study" => study::run(options),
+        "bench-study" => study::bench(Mode::parse(command, options)? == Mode::Quick),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }
