@@ -22,8 +22,8 @@ def main(argv=None) -> int:
                           "cluster (a LocalCluster unless --scheduler)")
     run.add_argument("--scheduler", help="address of a Dask scheduler (implies --engine dask)")
     run.add_argument("--workers", type=int,
-                     help="LocalCluster: the number of single-threaded worker processes "
-                          "(default: one per core)")
+                     help="LocalCluster: the number of single-threaded workers, threads of this "
+                          "process that each wait for one CLI process (default: one per core)")
     run.add_argument("--threads", type=int, help="local: threads of the native runner "
                                                  "(default: every core)")
     run.add_argument("--chunk-size", type=int, help="cases per chunk (default: 1000, or fewer "

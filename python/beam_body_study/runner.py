@@ -112,8 +112,17 @@ def default_chunk_size(cases: int) -> int:
     return max(1, min(CHUNK_CASES, math.ceil(cases / MIN_CHUNKS)))
 
 
+def sha256_text(text: str | None) -> str:
+    return hashlib.sha256((text or "").encode()).hexdigest()
+
+
+#: The files a work directory holds, which --restart removes (nothing else is touched).
+OWN_FILES = ("manifest.json", "lock", "chunk-*.csv", "chunk-*.json", "*.tmp-*")
+
+
 class WorkDir:
-    """The finished chunks of one study: `chunk-NNNNNN.csv` and its `.json` (who computed it)."""
+    """The finished chunks of one study: `chunk-NNNNNN.csv` and its `.json` (who computed it),
+    beside `manifest.json`. One run at a time holds it (`lock`, where the platform has flock)."""
 
     def __init__(self, path: Path, plan: Plan, chunk_size: int, restart: bool):
         self.path = path
@@ -121,26 +130,36 @@ class WorkDir:
         self.cases = plan.cases
         self.chunks = math.ceil(plan.cases / chunk_size) if plan.cases else 0
         fingerprint = plan.fingerprint(chunk_size)
+        parts = {
+            "study_sha256": sha256_text(plan.study_text),
+            "scene_sha256": sha256_text(plan.scene_text),
+            "cli_sha256": plan.cli_sha256,
+            "chunk_size": chunk_size,
+        }
         manifest = path / "manifest.json"
+        path.mkdir(parents=True, exist_ok=True)
+        self._lock = self._take_lock()
         if manifest.exists() and not restart:
             old = json.loads(manifest.read_text())
             if old.get("fingerprint") != fingerprint:
-                what = (
-                    f"chunks of {old.get('chunk_size')} cases"
-                    if old.get("chunk_size") != chunk_size
-                    else "another study, scene or beam-body build"
-                )
+                names = {"study_sha256": "the study file", "scene_sha256": "the base scene",
+                         "cli_sha256": "the beam-body binary", "chunk_size": "the chunk size"}
+                changed = [names[k] for k in names if old.get(k) != parts[k]] or ["the study"]
+                what = " and ".join([", ".join(changed[:-1]), changed[-1]] if len(changed) > 1
+                                    else changed)
                 raise StudyError(
-                    f"{path} holds the chunks of {what}: pass --restart to discard them, "
-                    f"or another --work-dir"
+                    f"{path} holds the chunks of an earlier run, and {what} changed since: "
+                    f"pass --restart to discard them, or another --work-dir"
                 )
-        if restart and path.exists():
-            shutil.rmtree(path)
+        if restart:
+            for pattern in OWN_FILES:
+                for f in path.glob(pattern):
+                    if f.name != "lock":
+                        f.unlink()
         elif not manifest.exists() and any(path.glob("chunk-*.csv")):
             raise StudyError(f"{path} holds chunk files but no manifest.json: pass --restart to "
                              "discard them, or another --work-dir")
-        path.mkdir(parents=True, exist_ok=True)
-        for stale in path.glob("*.tmp-*"):  # left by an interrupted write
+        for stale in path.glob("*.tmp-*"):  # left by an interrupted run (the lock is ours)
             stale.unlink()
         if not manifest.exists():
             atomic_write(
@@ -148,15 +167,28 @@ class WorkDir:
                 json.dumps(
                     {
                         "fingerprint": fingerprint,
+                        **parts,
                         "study": str(plan.path),
                         "cases": plan.cases,
-                        "chunk_size": chunk_size,
                         "chunks": self.chunks,
-                        "cli_sha256": plan.cli_sha256,
                     },
                     indent=1,
                 ).encode(),
             )
+
+    def _take_lock(self):
+        """An exclusive flock on `lock`, held while this object lives; None without fcntl."""
+        try:
+            import fcntl
+        except ImportError:  # Windows: no lock
+            return None
+        f = open(self.path / "lock", "a+")
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            f.close()
+            raise StudyError(f"another run is using {self.path}") from None
+        return f
 
     def bounds(self, k: int) -> tuple:
         return k * self.chunk_size, min((k + 1) * self.chunk_size, self.cases)
@@ -233,13 +265,24 @@ class Progress:
 
 def run_local(plan: Plan, work: WorkDir, todo: list, threads: int | None, progress: Progress):
     """Each chunk as one call of the CLI on every core (or `threads`), one after another."""
-    threads = threads or os.cpu_count() or 1
+    threads = threads if threads is not None else available_cores()
     spec = plan.spec()
     for k in todo:
         start, stop = work.bounds(k)
-        result = worker.run_chunk(spec, k, start, stop, threads=threads)
+        try:
+            result = worker.run_chunk(spec, k, start, stop, threads=threads)
+        except RuntimeError as e:
+            raise StudyError(f"{e} (the finished chunks are kept in {work.path})") from None
         work.save(k, result)
         progress.add(stop - start)
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its affinity), as the CLI counts them."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        return os.cpu_count() or 1
 
 
 class ByValue:
@@ -284,7 +327,7 @@ def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, worke
         # Workers as threads of this process by default: a task spends its time waiting for
         # the CLI's process, so worker processes would only add interpreters competing for
         # the cores (docs/study.md measures both).
-        n = workers or os.cpu_count() or 1
+        n = workers if workers is not None else available_cores()
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=local_processes,
                                dashboard_address=":0")  # a free port: 8787 may be taken
         client = Client(cluster)
@@ -304,13 +347,12 @@ def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, worke
         for fut in as_completed(futures):
             k = futures[fut]
             try:
-                result = fut.result()
+                work.save(k, fut.result())
             except Exception as e:  # noqa: BLE001: a chunk's failure is reported, not fatal
                 errors.append(f"chunk {k}: {e}")
                 continue
             finally:
                 fut.release()
-            work.save(k, result)
             start, stop = work.bounds(k)
             progress.add(stop - start)
     finally:
@@ -380,9 +422,11 @@ def run_study(study, out, *, engine="local", scheduler=None, workers=None, threa
     fmt = fmt or ("csv" if out.suffix.lower() == ".csv" else "parquet")
     if fmt not in ("parquet", "csv"):
         raise StudyError(f"--format {fmt}: must be parquet or csv")
-    size = chunk_size or default_chunk_size(p.cases)
-    if size < 1:
-        raise StudyError(f"--chunk-size {size}: must be at least 1")
+    for name, value in (("--chunk-size", chunk_size), ("--workers", workers),
+                        ("--threads", threads)):
+        if value is not None and value < 1:
+            raise StudyError(f"{name} {value}: must be at least 1")
+    size = chunk_size if chunk_size is not None else default_chunk_size(p.cases)
     work = WorkDir(Path(work_dir) if work_dir else out.with_name(out.name + ".parts"), p, size,
                    restart)
     done = work.done()

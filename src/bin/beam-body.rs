@@ -281,6 +281,9 @@ fn cmd_residual(args: &[String]) -> Result<(), Usage> {
     out.flush().map_err(|e| Usage(e.to_string()))
 }
 
+/// The most threads `study --threads` takes.
+const MAX_THREADS: usize = 1024;
+
 /// The options of `study`.
 struct StudyArgs {
     file: String,
@@ -325,8 +328,12 @@ fn parse_study_args(args: &[String]) -> Result<StudyArgs, Usage> {
             "--threads" => {
                 let text = value(arg)?;
                 match text.parse::<usize>() {
-                    Ok(n) if n >= 1 => out.threads = Some(n),
-                    _ => return Err(Usage(format!("--threads {text}: must be an integer >= 1"))),
+                    Ok(n) if (1..=MAX_THREADS).contains(&n) => out.threads = Some(n),
+                    _ => {
+                        return Err(Usage(format!(
+                            "--threads {text}: must be an integer in 1..={MAX_THREADS}"
+                        )))
+                    }
                 }
             }
             "--scene" => out.scene = Some(value(arg)?),
@@ -462,8 +469,9 @@ fn write_study_row(out: &mut impl Write, row: &Row) -> io::Result<()> {
             None => write!(out, ",")?,
         }
     }
-    let msg = &row.message;
-    if msg.contains([',', '"', '\n', '\r']) {
+    // One line per row, whatever a message holds.
+    let msg = row.message.replace(['\n', '\r'], " ");
+    if msg.contains([',', '"']) {
         write!(out, ",{},\"{}\",{}", row.status.name(), msg.replace('"', "\"\""), row.steps)?;
     } else {
         write!(out, ",{},{msg},{}", row.status.name(), row.steps)?;

@@ -289,15 +289,16 @@ impl BeamBody {
     }
 
     /// The static equilibrium (v1, ϑ1) [m, rad] at a fixed φ: of (15) (which the DAE
-    /// formulations share), or of (16) with `linear`.
-    pub fn equilibrium(&self, phi_fixed: f64, linear: bool) -> (f64, f64) {
+    /// formulations share), or of (16) with `linear`. `None` if Newton's method did not
+    /// converge.
+    pub fn equilibrium(&self, phi_fixed: f64, linear: bool) -> Option<(f64, f64)> {
         let phi = Phi { phi: phi_fixed, ..Phi::default() };
-        let q = if linear {
+        let (q, converged) = if linear {
             static_equilibrium(|q| self.linear(&phi, q, Vector2::zeros()).1)
         } else {
             static_equilibrium(|q| self.reduced(&phi, q, Vector2::zeros()).1)
         };
-        (q[0], q[1])
+        converged.then_some((q[0], q[1]))
     }
 
     /// Natural frequencies of (15) linearised about its static equilibrium at a fixed φ.
@@ -305,7 +306,7 @@ impl BeamBody {
     pub fn modes(&self, phi_fixed: f64) -> Modes {
         let phi = Phi { phi: phi_fixed, ..Phi::default() };
         let force = |q: Vector2<f64>| self.reduced(&phi, q, Vector2::zeros()).1;
-        let q = static_equilibrium(force);
+        let (q, _) = static_equilibrium(force);
         let (mass, _) = self.reduced(&phi, q, Vector2::zeros());
         let kt = tangent_stiffness(force, q);
         // Symmetrise: M⁻¹K_t is similar to L⁻¹K_t L⁻ᵀ with M = LLᵀ.
@@ -341,20 +342,24 @@ fn tangent_stiffness(
 }
 
 /// The q at rest where the generalised force vanishes, F(q, 0) = 0, by Newton's method from
-/// q = 0 (the equilibria of this beam are near the undeformed state).
-fn static_equilibrium(force: impl Fn(Vector2<f64>) -> Vector2<f64>) -> Vector2<f64> {
+/// q = 0 (the equilibria of this beam are near the undeformed state), and whether the
+/// iteration converged (else the last iterate).
+fn static_equilibrium(force: impl Fn(Vector2<f64>) -> Vector2<f64>) -> (Vector2<f64>, bool) {
     let mut q = Vector2::zeros();
     for _ in 0..50 {
         let Some(inv) = tangent_stiffness(&force, q).try_inverse() else {
-            break;
+            return (q, false);
         };
         let dq = inv * force(q);
         q += dq;
+        if !q.iter().all(|x| x.is_finite()) {
+            return (q, false);
+        }
         if dq.norm() < 1e-14 * (1.0 + q.norm()) {
-            break;
+            return (q, true);
         }
     }
-    q
+    (q, false)
 }
 
 /// x with A x = b by Gaussian elimination with partial pivoting, written out for 3×3 (the

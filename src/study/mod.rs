@@ -18,7 +18,7 @@ pub use sample::{normal_cdf, normal_quantile};
 use crate::model::{BeamBody, Formulation, Outputs};
 use crate::sim::{scene_entries, simulate_partial, Scene, SimError};
 use crate::solver::SolverError;
-use sample::{grid_point, latin_hypercube, name_key};
+use sample::{grid_point, latin_hypercube, name_key, open_unit};
 use std::fmt;
 use toml::{Table, Value};
 
@@ -165,7 +165,8 @@ impl Distribution {
             Distribution::Uniform { low, high } => low + (high - low) * u,
             Distribution::Normal { mean, sd, min, max } => {
                 let (lo, hi) = (normal_cdf((min - mean) / sd), normal_cdf((max - mean) / sd));
-                let p = lo + (hi - lo) * u;
+                // p can round to 0 or 1 where [min, max] lies far in a tail.
+                let p = open_unit(lo + (hi - lo) * u);
                 (mean + sd * normal_quantile(p)).clamp(min, max)
             }
             Distribution::LogNormal { mean, sd } => {
@@ -327,6 +328,11 @@ impl Study {
                     return Err("`sampling`: no parameter has a distribution".into());
                 }
                 samples = count(s.get("samples"), "sampling.samples")?;
+                if samples > MAX_CASES {
+                    return Err(format!(
+                        "`sampling.samples` = {samples}: must be at most {MAX_CASES} (2^53)"
+                    ));
+                }
                 seed = match s.get("seed") {
                     Some(Value::Integer(i)) if *i >= 0 => *i as u64,
                     Some(_) => return Err("`sampling.seed`: must be a non-negative integer".into()),
@@ -364,7 +370,13 @@ impl Study {
                 }
                 out
             }
-            Some(_) => return Err("`metrics`: must be a list of metric names".into()),
+            Some(_) => {
+                let all: Vec<_> = Metric::ALL.iter().map(|m| m.name()).collect();
+                return Err(format!(
+                    "`metrics`: must be a list of metric names: {}",
+                    all.join(", ")
+                ));
+            }
         };
         if metrics.contains(&Metric::ResidualV1) {
             check_residual_window(&base, &parameters)?;
@@ -465,7 +477,19 @@ impl Study {
         }
         let linear = scene.formulation == Formulation::Linear;
         let v1_eq = match BeamBody::new(scene.params) {
-            Ok(model) => model.equilibrium(scene.law.phi_end, linear).0,
+            Ok(model) => match model.equilibrium(scene.law.phi_end, linear) {
+                Some((v1, _)) => v1,
+                None if self.metrics.contains(&Metric::ResidualV1) => {
+                    row.status = Status::Failed;
+                    row.message = format!(
+                        "the static equilibrium at phi_end = {} did not converge (residual_v1 \
+                         is measured from it)",
+                        scene.law.phi_end
+                    );
+                    return row;
+                }
+                None => 0.0, // not used
+            },
             Err(e) => {
                 row.message = e.to_string();
                 return row;
@@ -569,9 +593,16 @@ fn check_residual_window(base: &Scene, parameters: &[Parameter]) -> Result<(), S
         Some(p) => {
             let hi = p.axis.bounds().1;
             if hi >= t_end {
+                let bound = match &p.axis {
+                    Axis::Random(Distribution::Normal { .. }) => " (set `max` below it)",
+                    Axis::Random(Distribution::LogNormal { .. }) => {
+                        " (a log-normal is unbounded above: use a truncated normal)"
+                    }
+                    _ => "",
+                };
                 return Err(format!(
                     "`parameters.t_rot` reaches {hi}, but the metric residual_v1 needs \
-                     t_rot < t_end = {t_end}"
+                     t_rot < t_end = {t_end}{bound}"
                 ));
             }
         }
@@ -599,6 +630,14 @@ fn check_axis_range(base: &Scene, name: &str, axis: &Axis, field: &str) -> Resul
         Axis::Random(Distribution::Normal { .. }) => ("min", "max"),
         Axis::Random(Distribution::LogNormal { .. }) => ("mean", "mean"),
     };
+    if let Axis::Values(values) = axis {
+        for (i, &v) in values.iter().enumerate() {
+            if let Err(e) = base.clone().set_number(name, v) {
+                return Err(format!("`{field}.values[{i}]`: {e}"));
+            }
+        }
+        return Ok(());
+    }
     for (value, key) in [(lo, lo_key), (hi, hi_key)] {
         // An unbounded side is checked at the largest finite value.
         let probe = value.clamp(-f64::MAX, f64::MAX);
@@ -703,7 +742,15 @@ fn parse_axis(spec: &Table, field: &str) -> Result<Axis, String> {
             ));
         }
         if count > 1 && start == stop {
-            return Err(format!("`{field}`: start = stop = {start} with count = {count}"));
+            return Err(format!(
+                "`{field}.stop` = {stop}: must differ from start when count = {count} > 1"
+            ));
+        }
+        if count == 1 && start != stop {
+            return Err(format!(
+                "`{field}.stop` = {stop}: a grid of count = 1 is its start alone, so stop must \
+                 equal start = {start} (or use values = [...])"
+            ));
         }
         return Ok(Axis::Grid { start, stop, count, log });
     }

@@ -81,10 +81,16 @@ impl Permutation {
 pub fn latin_hypercube(seed: u64, key: u64, s: u64, n: u64) -> f64 {
     let perm = Permutation::new(n, hash3(seed, key, 0x5354_5241_5441)); // "STRATA"
     let stratum = perm.apply(s);
-    // 53 random bits, centred: strictly inside (0, 1).
-    let bits = hash3(seed, key, s.wrapping_add(1).wrapping_mul(GOLDEN)) >> 11;
-    let jitter = (bits as f64 + 0.5) / (1u64 << 53) as f64;
-    (stratum as f64 + jitter) / n as f64
+    // 52 random bits, centred: the jitter is in [2⁻⁵³, 1 − 2⁻⁵³], exactly. The sum can still
+    // round to n in the last stratum of a large n, so the result is kept inside (0, 1).
+    let bits = hash3(seed, key, s.wrapping_add(1).wrapping_mul(GOLDEN)) >> 12;
+    let jitter = (bits as f64 + 0.5) / (1u64 << 52) as f64;
+    open_unit((stratum as f64 + jitter) / n as f64)
+}
+
+/// `u` moved into the open interval (0, 1): [f64::MIN_POSITIVE, 1 − 2⁻⁵³].
+pub fn open_unit(u: f64) -> f64 {
+    u.clamp(f64::MIN_POSITIVE, 1.0 - f64::EPSILON / 2.0)
 }
 
 /// The standard normal distribution function Φ(x) = erfc(−x/√2)/2.
@@ -194,6 +200,19 @@ mod tests {
         // agree at one place on average.
         assert!(fixed_a < 10, "{fixed_a} fixed points");
         assert!(same < 10, "{same} common images");
+    }
+
+    #[test]
+    fn latin_hypercube_coordinates_stay_inside_the_open_unit_interval() {
+        // The last stratum of a large n, where (n − 1 + jitter)/n can round to 1.
+        let n = 1u64 << 40;
+        for s in 0..2000 {
+            let u = latin_hypercube(9, 1, s, n);
+            assert!(u > 0.0 && u < 1.0, "{u}");
+        }
+        assert_eq!(open_unit(1.0), 1.0 - f64::EPSILON / 2.0);
+        assert!(normal_quantile(open_unit(1.0)).is_finite());
+        assert!(normal_quantile(open_unit(0.0)).is_finite());
     }
 
     #[test]

@@ -76,7 +76,7 @@ values = [12]
     .unwrap();
     let row = study.run_case(0);
     let model = BeamBody::new(crate::model::Params::default()).unwrap();
-    let v1_eq = model.equilibrium(std::f64::consts::FRAC_PI_2, false).0;
+    let v1_eq = model.equilibrium(std::f64::consts::FRAC_PI_2, false).unwrap().0;
     assert!(v1_eq < -0.1, "{v1_eq}");
     let (residual, max_v1) = (row.metrics[0].unwrap(), row.metrics[1].unwrap());
     // The vibration about the bent state is smaller than the deflection itself.
@@ -255,6 +255,14 @@ fn bad_study_files_name_the_field() {
         ("[parameters.M2]\nvalues = [1, \"a\"]", "`parameters.M2.values[1]`: must be a number"),
         ("[parameters.l]\nstart = 0\nstop = 2\ncount = 3\nspacing = \"log\"", "log grid"),
         ("x = ", "not a valid TOML file"),
+        ("[parameters.M2]\nvalues = [6, -1]", "`parameters.M2.values[1]`"),
+        ("[parameters.M2]\nstart = 6\nstop = 9\ncount = 1", "`parameters.M2.stop` = 9"),
+        ("[parameters.M2]\nstart = 6\nstop = 6\ncount = 3", "must differ from start"),
+        ("metrics = \"peak_M\"", "must be a list of metric names: residual_v1"),
+        (
+            "[sampling]\nsamples = 9007199254740993\nseed = 1\n[parameters.EI]\ndistribution = \"uniform\"\nlow = 1\nhigh = 2",
+            "`sampling.samples` = 9007199254740993: must be at most",
+        ),
     ];
     for (text, want) in cases {
         let e = parse(text).unwrap_err();
