@@ -18,6 +18,7 @@ mod fuzz;
 mod import;
 mod model_description;
 mod platforms;
+mod profile;
 mod progress;
 mod python;
 mod study;
@@ -122,6 +123,11 @@ Commands:
           local engine, a LocalCluster of 1 and 2 workers and a loopback scheduler with
           2 worker processes; the overhead of a chunk's CLI call; 5 shuffled rounds
           (2 with --quick); target/bench/study.{csv,md}, and docs/study.md in the full run.
+  profile Where the integrator's instructions go, per accepted step: callgrind on
+          one run of each benchmark scene at rtol 1e-6 (a release build with symbols in
+          target/prof), by the source line of each instruction: the integrator, the
+          coefficients, the model, sin and cos, log/exp/pow, LU, the guard
+          (xtask/python/profile_step.py); target/prof/profile.md.
   setup   Install what the build and the whole suite need beyond Rust and Python:
           the launcher that `cargo xtask` runs first (xtask/launch) installs
           libclang-dev (bindgen in fmi-sys) when libclang is missing; then the Debian
@@ -182,6 +188,10 @@ fn run(args: &[String]) -> Result {
         }
         "study" => study::run(options),
         "bench-study" => study::bench(Mode::parse(command, options)? == Mode::Quick),
+        "profile" => {
+            no_options(command, options)?;
+            profile::run()
+        }
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }
