@@ -74,13 +74,19 @@ class Plan:
             "scene_text": self.scene_text,
         }
 
+    def identity(self, chunk_size: int) -> dict:
+        """What makes finished chunks reusable: the study, its scene, the binary, the
+        chunking (kept in a work directory's manifest)."""
+        return {
+            "study_sha256": sha256_text(self.study_text),
+            "scene_sha256": sha256_text(self.scene_text),
+            "cli_sha256": self.cli_sha256,
+            "chunk_size": chunk_size,
+        }
+
     def fingerprint(self, chunk_size: int) -> str:
-        """Changes with the study, its scene, the binary and the chunking."""
-        h = hashlib.sha256()
-        for part in (self.study_text, self.scene_text or "", self.cli_sha256, str(chunk_size)):
-            h.update(part.encode())
-            h.update(b"\0")
-        return h.hexdigest()
+        """One hash of the identity (the tag of a study's Dask tasks)."""
+        return sha256_text(json.dumps(self.identity(chunk_size), sort_keys=True))
 
 
 def plan(study: str | Path, cli: str | None = None) -> Plan:
@@ -129,22 +135,16 @@ class WorkDir:
         self.chunk_size = chunk_size
         self.cases = plan.cases
         self.chunks = math.ceil(plan.cases / chunk_size) if plan.cases else 0
-        fingerprint = plan.fingerprint(chunk_size)
-        parts = {
-            "study_sha256": sha256_text(plan.study_text),
-            "scene_sha256": sha256_text(plan.scene_text),
-            "cli_sha256": plan.cli_sha256,
-            "chunk_size": chunk_size,
-        }
+        parts = plan.identity(chunk_size)
         manifest = path / "manifest.json"
         path.mkdir(parents=True, exist_ok=True)
         self._lock = self._take_lock()
         if manifest.exists() and not restart:
             old = json.loads(manifest.read_text())
-            if old.get("fingerprint") != fingerprint:
+            if any(old.get(k) != v for k, v in parts.items()):
                 names = {"study_sha256": "the study file", "scene_sha256": "the base scene",
                          "cli_sha256": "the beam-body binary", "chunk_size": "the chunk size"}
-                changed = [names[k] for k in names if old.get(k) != parts[k]] or ["the study"]
+                changed = [names[k] for k in names if old.get(k) != parts[k]]
                 what = " and ".join([", ".join(changed[:-1]), changed[-1]] if len(changed) > 1
                                     else changed)
                 raise StudyError(
@@ -166,7 +166,6 @@ class WorkDir:
                 manifest,
                 json.dumps(
                     {
-                        "fingerprint": fingerprint,
                         **parts,
                         "study": str(plan.path),
                         "cases": plan.cases,
