@@ -68,8 +68,19 @@ pub fn pow(x: f64, y: f64) -> f64 {
 /// on Linux, on every target.
 #[inline]
 pub fn powi(x: f64, n: i32) -> f64 {
+    let product = powi_const(x, n.unsigned_abs());
+    if n < 0 {
+        1.0 / product
+    } else {
+        product
+    }
+}
+
+/// xⁿ for n ≥ 0, the multiplications of [`powi`]; usable in constants.
+#[inline]
+pub const fn powi_const(x: f64, n: u32) -> f64 {
     let mut base = x;
-    let mut bits = n.unsigned_abs();
+    let mut bits = n;
     let mut product = 1.0;
     loop {
         if bits & 1 == 1 {
@@ -81,11 +92,7 @@ pub fn powi(x: f64, n: i32) -> f64 {
         }
         base *= base;
     }
-    if n < 0 {
-        1.0 / product
-    } else {
-        product
-    }
+    product
 }
 
 /// The angle of the point (x, y) from the positive x axis, in (−π, π].
