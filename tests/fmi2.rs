@@ -1799,8 +1799,8 @@ fn corrupt_serialized_states_are_refused() {
         reseal(&mut bad);
         bad
     };
-    refuse(&resealed(8, &1u32.to_le_bytes()), &["version 1"], "version 1");
-    refuse(&resealed(8, &3u32.to_le_bytes()), &["version 3"], "version 3");
+    refuse(&resealed(8, &2u32.to_le_bytes()), &["version 2"], "version 2");
+    refuse(&resealed(8, &4u32.to_le_bytes()), &["version 4"], "version 4");
     refuse(&resealed(8, &0u32.to_le_bytes()), &["version 0"], "version 0");
     let mut magic = bytes.clone();
     magic[0] = b'X';

@@ -25,7 +25,7 @@ use crate::solver::{check_rtol, StateVisitor};
 
 const MAGIC: &[u8; 8] = b"BBFMUST\0";
 /// Version of the byte format; bump it when [`visit_core`] changes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 const GUID_LEN: usize = 38;
 const HEADER: usize = 8 + 4 + GUID_LEN + 8;
 

@@ -123,36 +123,6 @@ fn root(x: f64, k: usize) -> f64 {
     }
 }
 
-/// `$e` with `$Q` a constant equal to the order `$q` (1..=QMAX; QMAX for anything larger),
-/// so that loops over the order unroll: the order changes seldom, and a loop of one to six
-/// short vector operations costs more in its control than in its arithmetic.
-macro_rules! by_order {
-    ($q:expr, $Q:ident => $e:expr) => {
-        match $q {
-            1 => {
-                const $Q: usize = 1;
-                $e
-            }
-            2 => {
-                const $Q: usize = 2;
-                $e
-            }
-            3 => {
-                const $Q: usize = 3;
-                $e
-            }
-            4 => {
-                const $Q: usize = 4;
-                $e
-            }
-            _ => {
-                const $Q: usize = QMAX;
-                $e
-            }
-        }
-    };
-}
-
 /// The prediction z ← P·z by the Pascal triangle (CVODE cvPredict), or with `UNDO` its
 /// inverse (cvRestore), for order q. This runs at every step attempt. The additions are
 /// written out for each order, on a local copy of the columns, so that the columns stay in
@@ -669,8 +639,9 @@ impl<const N: usize> Bdf<N> {
     /// The order, with the visitor call per item (`×k` for k calls with the same name):
     /// 1. `t`; `zn` ×N for each of the 6 Nordsieck columns z_0..z_5; `hscale`; `h`;
     ///    `q` (count); `q_next` (count); `h_next`; `qwait` (count); `tau` ×7.
-    /// 2. `coeffs.l` ×6, `coeffs.tq` ×6; `saved_tq5`; `hu`; `qu` (count); `acor` ×N;
-    ///    `ewt` ×N; `eta_max`.
+    /// 2. `coeffs.l` ×6, `coeffs.tq` ×6, `coeffs.key_q` (count), `coeffs.key_order_change`
+    ///    (flag), `coeffs.key_h`, `coeffs.key_tau` ×5; `saved_tq5`; `hu`; `qu` (count);
+    ///    `acor` ×N; `ewt` ×N; `eta_max`.
     /// 3. `jac` ×N² (column-major); `jac_valid` (flag); `lu` (flag: an LU is present);
     ///    `lu.factors` ×N² (column-major); `lu.perm` ×N (counts). Without an LU the factors
     ///    and the permutation are still visited: a writer gives zeros and the identity, and

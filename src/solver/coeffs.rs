@@ -32,15 +32,19 @@ pub(crate) struct StepCoeffs {
     /// only when an order change is being considered. Index 0 and 4 are unused.
     pub tq: [f64; NCOL],
     /// What they were computed from: the order (0: nothing yet), whether tq[1] and tq[3]
-    /// were computed, and the ratios ξ. [`bdf_coeffs`] reuses them for the same order and
-    /// ratios, as over a run of equal steps.
+    /// were computed, the step h and the past steps τ_1..=τ_q (0 beyond q).
+    /// [`StepCoeffs::update`] reuses them for the same order, step and past steps, as over
+    /// a run of equal steps. (The coefficients depend only on the ratios ξ; the key is the
+    /// steps themselves, which cost no division to compare, and equal steps give equal
+    /// ratios.)
     pub key_q: usize,
     pub key_order_change: bool,
-    pub key_xi: [f64; NCOL + 1],
+    pub key_h: f64,
+    pub key_tau: [f64; QMAX],
 }
 
 impl StepCoeffs {
-    /// Visits l, then tq (see [`Bdf::visit_state`](super::Bdf::visit_state)).
+    /// Visits l, then tq, then the key (see [`Bdf::visit_state`](super::Bdf::visit_state)).
     pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
         for x in &mut self.l {
             v.real("coeffs.l", x);
@@ -52,13 +56,14 @@ impl StepCoeffs {
         v.count("coeffs.key_q", &mut q);
         self.key_q = usize::try_from(q).unwrap_or(usize::MAX);
         v.flag("coeffs.key_order_change", &mut self.key_order_change);
-        for x in &mut self.key_xi {
-            v.real("coeffs.key_xi", x);
+        v.real("coeffs.key_h", &mut self.key_h);
+        for x in &mut self.key_tau {
+            v.real("coeffs.key_tau", x);
         }
     }
 
     /// l is finite. tq is not negative: its entries are absolute values or 0. They may be
-    /// +∞ or NaN, which [`bdf_coeffs`] produces at isolated step ratios: a zero of
+    /// +∞ or NaN, which [`coeffs_for`] produces at isolated step ratios: a zero of
     /// a2 = 1 + q·a1 makes tq[2] and tq[3] infinite, and a zero of 1/ξ* makes l_q = 0 and
     /// tq[1], tq[5] = 0/0. The integrator recomputes the coefficients before it uses them,
     /// so the stored ones never influence a later step.
@@ -68,13 +73,21 @@ impl StepCoeffs {
         if self.key_q > QMAX {
             return Err(SolverError::InvalidState { field: "coeffs.key_q" });
         }
-        require_finite(&self.key_xi, "coeffs.key_xi")?;
+        require_finite(&[self.key_h], "coeffs.key_h")?;
+        require_finite(&self.key_tau, "coeffs.key_tau")?;
         // Coefficients that would be reused must be the ones their key gives.
-        if self.key_q > 0
-            && (self.key_xi[1] != 1.0
-                || self.key_xi[1..=self.key_q + 1].iter().any(|x| *x < 1.0)
-                || !same(self, &coeffs_from_xi(self.key_q, &self.key_xi, self.key_order_change)))
-        {
+        if self.key_q > 0 {
+            let q = self.key_q;
+            let mut tau = [0.0; NCOL + 1];
+            tau[1..=QMAX].copy_from_slice(&self.key_tau);
+            if self.key_h <= 0.0
+                || self.key_tau[..q].iter().any(|t| *t < 0.0)
+                || self.key_tau[q..].iter().any(|t| *t != 0.0)
+                || !same(self, &coeffs_for(q, self.key_h, &tau, self.key_order_change))
+            {
+                return Err(SolverError::InvalidState { field: "coeffs" });
+            }
+        } else if self.key_h != 0.0 || self.key_tau.iter().any(|t| *t != 0.0) {
             return Err(SolverError::InvalidState { field: "coeffs" });
         }
         Ok(())
@@ -85,18 +98,6 @@ impl StepCoeffs {
 const HARMONIC: [f64; NCOL] =
     [0.0, 1.0, 1.5, 1.5 + 1.0 / 3.0, 1.5 + 1.0 / 3.0 + 0.25, 1.5 + 1.0 / 3.0 + 0.25 + 0.2];
 
-/// The ratios ξ_1..=ξ_{q+1} of the new step (index 0 unused).
-fn xi_ratios(q: usize, h: f64, tau: &[f64; NCOL + 1]) -> [f64; NCOL + 1] {
-    let mut xi = [0.0; NCOL + 1];
-    let mut span = h;
-    xi[1] = 1.0;
-    for j in 2..=(q + 1).min(NCOL) {
-        span += tau[j - 1];
-        xi[j] = span / h;
-    }
-    xi
-}
-
 /// Bitwise equality of the coefficients (NaN entries included), keys aside.
 fn same(a: &StepCoeffs, b: &StepCoeffs) -> bool {
     let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
@@ -104,7 +105,7 @@ fn same(a: &StepCoeffs, b: &StepCoeffs) -> bool {
 }
 
 /// Coefficients of the order-q step of size h after the steps `tau`: those of `prev` when
-/// they were computed for the same order, ratios ξ and `order_change`, else new ones.
+/// they were computed for the same order, steps and `order_change`, else new ones.
 ///
 /// `order_change` asks for tq[1] and tq[3], which need one more past step.
 #[cfg(test)]
@@ -122,46 +123,65 @@ pub(crate) fn bdf_coeffs(
 
 impl StepCoeffs {
     /// Makes these the coefficients of the order-q step of size h after the steps `tau`,
-    /// keeping them when they were computed for the same order, ratios ξ and `order_change`
+    /// keeping them when they were computed for the same order, steps and `order_change`
     /// (in place: this runs at every step attempt).
     ///
     /// `order_change` asks for tq[1] and tq[3], which need one more past step.
     pub(crate) fn update(&mut self, q: usize, h: f64, tau: &[f64; NCOL + 1], order_change: bool) {
         debug_assert!((1..=QMAX).contains(&q));
-        let xi = xi_ratios(q, h, tau);
+        by_order!(q, Q => self.update_q::<Q>(h, tau, order_change));
+    }
+
+    fn update_q<const Q: usize>(&mut self, h: f64, tau: &[f64; NCOL + 1], order_change: bool) {
         // Coefficients computed with tq[1] and tq[3] serve a step that does not need them:
         // the order change is considered every other step, so this keeps the cache warm.
-        if self.key_q == q && self.key_xi == xi && (self.key_order_change || !order_change) {
+        // The key holds τ_1..=τ_q, the steps that ξ_2..=ξ_{q+1} are made of.
+        if self.key_q == Q
+            && self.key_h == h
+            && self.key_tau[..Q] == tau[1..=Q]
+            && (self.key_order_change || !order_change)
+        {
             return;
         }
-        *self = coeffs_from_xi(q, &xi, order_change);
+        *self = coeffs_q::<Q>(h, tau, order_change);
     }
 }
 
-/// The coefficients for order q and ratios ξ (see [`bdf_coeffs`]).
-fn coeffs_from_xi(q: usize, xi: &[f64; NCOL + 1], order_change: bool) -> StepCoeffs {
-    let qf = q as f64;
+/// The coefficients for order q, step h and past steps `tau` (see [`StepCoeffs::update`]).
+fn coeffs_for(q: usize, h: f64, tau: &[f64; NCOL + 1], order_change: bool) -> StepCoeffs {
+    by_order!(q, Q => coeffs_q::<Q>(h, tau, order_change))
+}
 
+/// [`coeffs_for`] with the order a constant, so that its loops unroll. In terms of the
+/// ratios ξ_j = (h + τ_1 + … + τ_{j−1})/h, j = 1..=q+1.
+fn coeffs_q<const Q: usize>(h: f64, tau: &[f64; NCOL + 1], order_change: bool) -> StepCoeffs {
+    let qf = Q as f64;
+
+    // 1/ξ_j, j = 1..=q+1 (index 0 unused).
     let mut inv_xi = [0.0; NCOL + 1];
-    for (inv, x) in inv_xi.iter_mut().zip(xi).take(q + 2).skip(1) {
-        *inv = 1.0 / x;
+    inv_xi[1] = 1.0;
+    let mut span = h;
+    for j in 2..=(Q + 1).min(NCOL) {
+        span += tau[j - 1];
+        inv_xi[j] = 1.0 / (span / h);
     }
-    // Λ(x) = Π_{j=1}^{q−1} (1 + x/ξ_j) · (1 + x/ξ*): the l_j are its coefficients.
+    // Λ(x) = Π_{j=1}^{q−1} (1 + x/ξ_j) · (1 + x/ξ*): the l_j are its coefficients. After
+    // the k-th factor only l_0..=l_k are non-zero, so the update stops there.
     let mut l = [0.0; NCOL];
     l[0] = 1.0;
-    for &inv in &inv_xi[1..q] {
-        for i in (1..=q).rev() {
+    for (k, &inv) in inv_xi.iter().enumerate().take(Q).skip(1) {
+        for i in (1..=k).rev() {
             l[i] += l[i - 1] * inv;
         }
     }
     // α0 = −Σ 1/j is the leading coefficient of the fixed-leading-coefficient formula;
     // α̂0 = −Σ 1/ξ_j that of the variable-coefficient formula on the same points.
-    let alpha0 = -HARMONIC[q];
-    let sum_inv_xi_head: f64 = inv_xi[1..q].iter().sum();
-    let alpha0_hat = -sum_inv_xi_head - inv_xi[q];
+    let alpha0 = -HARMONIC[Q];
+    let sum_inv_xi_head: f64 = inv_xi[1..Q].iter().sum();
+    let alpha0_hat = -sum_inv_xi_head - inv_xi[Q];
     // 1/ξ* is chosen so that l_1 = −α0.
-    let inv_xi_star = if q == 1 { 1.0 } else { -sum_inv_xi_head - alpha0 };
-    for i in (1..=q).rev() {
+    let inv_xi_star = if Q == 1 { 1.0 } else { -sum_inv_xi_head - alpha0 };
+    for i in (1..=Q).rev() {
         l[i] += l[i - 1] * inv_xi_star;
     }
 
@@ -169,23 +189,25 @@ fn coeffs_from_xi(q: usize, xi: &[f64; NCOL + 1], order_change: bool) -> StepCoe
     let a1 = 1.0 - alpha0_hat + alpha0;
     let a2 = 1.0 + qf * a1;
     tq[2] = (a1 / (alpha0 * a2)).abs();
-    tq[5] = (a2 * inv_xi_star / (l[q] * inv_xi[q])).abs();
+    tq[5] = (a2 * inv_xi_star / (l[Q] * inv_xi[Q])).abs();
     if order_change {
-        tq[1] = if q > 1 {
-            let c = inv_xi_star / l[q];
+        tq[1] = if Q > 1 {
+            let c = inv_xi_star / l[Q];
             let a3 = alpha0 + 1.0 / qf;
-            let a4 = alpha0_hat + inv_xi[q];
+            let a4 = alpha0_hat + inv_xi[Q];
             (c * (1.0 - a4 + a3) / a3).abs()
         } else {
             1.0
         };
-        let inv_xi_next = inv_xi[q + 1];
+        let inv_xi_next = inv_xi[(Q + 1).min(NCOL)];
         let a5 = alpha0 - 1.0 / (qf + 1.0);
         let a6 = alpha0_hat - inv_xi_next;
         let c_next = (1.0 - a6 + a5) / a2;
         tq[3] = (c_next / (inv_xi_next * (qf + 2.0) * a5)).abs();
     }
-    StepCoeffs { l, tq, key_q: q, key_order_change: order_change, key_xi: *xi }
+    let mut key_tau = [0.0; QMAX];
+    key_tau[..Q].copy_from_slice(&tau[1..=Q]);
+    StepCoeffs { l, tq, key_q: Q, key_order_change: order_change, key_h: h, key_tau }
 }
 
 /// Raises the order from q to q+1 after an accepted step of order q: fills z_{q+1} from the
@@ -283,6 +305,42 @@ mod tests {
             assert!((c.l[1] - want).abs() < 1e-14, "q = {q}");
             assert_eq!(c.l[0], 1.0);
             assert!(c.tq[1..=5].iter().enumerate().all(|(i, t)| i == 3 || t.is_finite()));
+        }
+    }
+
+    /// The cache is keyed by the order, the step, the past steps the order uses and the
+    /// flag: a computation with any of them changed gives the coefficients a fresh one
+    /// gives, and a key that only differs in past steps beyond q is a hit.
+    #[test]
+    fn cached_coefficients_are_those_of_a_fresh_computation() {
+        let tau = [0.0, 0.7, 1.3, 0.4, 2.0, 0.9, 1.1];
+        for q in 1..=QMAX {
+            for order_change in [false, true] {
+                let first = bdf_coeffs(&StepCoeffs::default(), q, 0.5, &tau, order_change);
+                assert_eq!(first, coeffs_for(q, 0.5, &tau, order_change));
+                first.check().unwrap();
+                // Changed step, a changed past step within q, the other order.
+                let mut changed = tau;
+                changed[q] *= 1.5;
+                let other_q = if q == 1 { 2 } else { q - 1 };
+                for (qq, h, t) in [(q, 0.6, tau), (q, 0.5, changed), (other_q, 0.5, tau)] {
+                    let got = bdf_coeffs(&first, qq, h, &t, order_change);
+                    assert!(same(&got, &coeffs_for(qq, h, &t, order_change)), "q = {q}");
+                    assert_eq!((got.key_q, got.key_h), (qq, h));
+                }
+                // A step beyond q changed: not part of the key, a hit.
+                let mut beyond = tau;
+                beyond[(q + 1).min(NCOL)] += 1.0;
+                assert_eq!(bdf_coeffs(&first, q, 0.5, &beyond, order_change), first);
+                // Coefficients with tq[1] and tq[3] serve a step without the order change,
+                // not the other way round.
+                let plain = bdf_coeffs(&first, q, 0.5, &tau, false);
+                assert_eq!(plain, first);
+                if !order_change {
+                    let full = bdf_coeffs(&first, q, 0.5, &tau, true);
+                    assert!(full.key_order_change && full.tq[3] != 0.0, "q = {q}");
+                }
+            }
         }
     }
 

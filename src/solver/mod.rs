@@ -4,6 +4,36 @@
 //! Generic over the system size `N` (const generics, stack-only data), independent of the
 //! beam: it sees only an [`OdeSystem`]. No I/O, no `unsafe`.
 
+/// `$e` with `$Q` a constant equal to the order `$q` (1..=QMAX; QMAX for anything larger),
+/// so that loops over the order unroll: the order changes seldom, and a loop of one to six
+/// short vector operations costs more in its control than in its arithmetic.
+macro_rules! by_order {
+    ($q:expr, $Q:ident => $e:expr) => {
+        match $q {
+            1 => {
+                const $Q: usize = 1;
+                $e
+            }
+            2 => {
+                const $Q: usize = 2;
+                $e
+            }
+            3 => {
+                const $Q: usize = 3;
+                $e
+            }
+            4 => {
+                const $Q: usize = 4;
+                $e
+            }
+            _ => {
+                const $Q: usize = $crate::solver::coeffs::QMAX;
+                $e
+            }
+        }
+    };
+}
+
 mod bdf;
 mod coeffs;
 mod config;

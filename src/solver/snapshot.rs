@@ -263,7 +263,8 @@ mod tests {
         want.extend(std::iter::repeat_n((Kind::Real, "coeffs.l"), 6));
         want.extend(std::iter::repeat_n((Kind::Real, "coeffs.tq"), 6));
         want.extend([(Kind::Count, "coeffs.key_q"), (Kind::Flag, "coeffs.key_order_change")]);
-        want.extend(std::iter::repeat_n((Kind::Real, "coeffs.key_xi"), 7));
+        want.push((Kind::Real, "coeffs.key_h"));
+        want.extend(std::iter::repeat_n((Kind::Real, "coeffs.key_tau"), 5));
         want.extend([(Kind::Real, "saved_tq5"), (Kind::Real, "hu"), (Kind::Count, "qu")]);
         want.extend(std::iter::repeat_n((Kind::Real, "acor"), n));
         want.extend(std::iter::repeat_n((Kind::Real, "ewt"), n));
