@@ -69,30 +69,44 @@ def part_of(file: str, function: str) -> str:
     return "process start and the rest"
 
 
-def main() -> int:
+def run_callgrind(binary: Path, scene: Path, formulation: str, rtol: str, tmp: Path,
+                  options: list[str]) -> tuple[Path, int]:
+    """callgrind (with `options`) on `beam-body study` of one case of the scene, outputs only
+    at 0 and t_end; the callgrind file and the accepted steps."""
+    # A study without parameters is one case: the scene itself.
+    study = tmp / "one.toml"
+    # Outputs only at 0 and t_end: the output sampling is not the integrator's cost.
+    study.write_text(f'scene = "{scene}"\nformulation = "{formulation}"\n'
+                     f'rtol = {rtol}\nmetrics = ["max_v1"]\n[set]\ndt_out = 1e6\n')
+    out = tmp / "cg.out"
+    run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+                          *options, str(binary), "study", str(study), "--threads", "1", "-o",
+                          str(tmp / "row.csv")], capture_output=True, text=True)
+    if run.returncode != 0:
+        print(run.stderr, file=sys.stderr)
+        raise SystemExit(1)
+    row = (tmp / "row.csv").read_text().splitlines()[1].split(",")
+    return out, int(row[-1])
+
+
+def arguments() -> argparse.ArgumentParser:
+    """The arguments both profile scripts take: BINARY SCENE [--formulation F] [--rtol X]."""
     ap = argparse.ArgumentParser()
     ap.add_argument("binary")
     ap.add_argument("scene")
     ap.add_argument("--formulation", default="reduced")
     ap.add_argument("--rtol", default="1e-6")
+    return ap
+
+
+def main() -> int:
+    ap = arguments()
     ap.add_argument("--label")
     args = ap.parse_args()
     scene = Path(args.scene).resolve()
     with tempfile.TemporaryDirectory() as tmp:
-        # A study without parameters is one case: the scene itself.
-        study = Path(tmp) / "one.toml"
-        # Outputs only at 0 and t_end: the output sampling is not the integrator's cost.
-        study.write_text(f'scene = "{scene}"\nformulation = "{args.formulation}"\n'
-                         f'rtol = {args.rtol}\nmetrics = ["max_v1"]\n[set]\ndt_out = 1e6\n')
-        out = Path(tmp) / "cg.out"
-        run = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-                              args.binary, "study", str(study), "--threads", "1", "-o",
-                              str(Path(tmp) / "row.csv")], capture_output=True, text=True)
-        if run.returncode != 0:
-            print(run.stderr, file=sys.stderr)
-            return 1
-        row = (Path(tmp) / "row.csv").read_text().splitlines()[1].split(",")
-        steps = int(row[-1])
+        out, steps = run_callgrind(Path(args.binary), scene, args.formulation, args.rtol,
+                                   Path(tmp), [])
         ann = subprocess.run(["callgrind_annotate", "--auto=no", "--threshold=100", str(out)],
                              capture_output=True, text=True, check=True).stdout
     total, parts = 0, defaultdict(int)

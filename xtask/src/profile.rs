@@ -5,8 +5,9 @@ use std::process::Command;
 
 use crate::{project_root, python, run_cmd, Result};
 
-/// `cargo xtask profile`: a release build with symbols and line tables (target/prof), and
-/// xtask/python/profile_step.py on each benchmark scene at rtol 1e-6; target/prof/profile.md.
+/// `cargo xtask profile`: a release build with symbols and line tables (target/prof),
+/// xtask/python/profile_step.py on each benchmark scene at rtol 1e-6, and
+/// xtask/python/profile_lines.py on the paper's; target/prof/profile.md.
 pub fn run() -> Result {
     crate::system::ensure("cargo xtask profile", &[crate::system::TEST_TOOLS])?;
     let python = python::ensure_venv()?;
@@ -47,6 +48,23 @@ pub fn run() -> Result {
         report.push('\n');
         report.push_str(&String::from_utf8_lossy(&out.stdout));
     }
+    // The paper's scene line by line: each instruction to the innermost line of ours in its
+    // inline chain (xtask/python/profile_lines.py).
+    let out = Command::new(&python)
+        .arg(root.join("xtask").join("python").join("profile_lines.py"))
+        .arg(&binary)
+        .arg(root.join("scenes").join("paper.toml"))
+        .args(["--top", "40"])
+        .current_dir(root.join("xtask").join("python"))
+        .output()
+        .map_err(|e| format!("cannot run profile_lines.py: {e}"))?;
+    if !out.status.success() {
+        return Err(
+            format!("profile_lines.py failed: {}", String::from_utf8_lossy(&out.stderr)).into()
+        );
+    }
+    report.push_str("\n## paper, the 40 costliest lines of ours\n\n");
+    report.push_str(&String::from_utf8_lossy(&out.stdout));
     let path = root.join("target").join("prof").join("profile.md");
     crate::write_text(&path, &report)?;
     print!("{report}");
