@@ -219,7 +219,16 @@ impl BeamBody {
         qd: Vector2<f64>,
     ) -> Vector2<f64> {
         let (m, f) = if linear { self.linear(phi, q, qd) } else { self.reduced(phi, q, qd) };
-        m.try_inverse().map_or(Vector2::repeat(f64::NAN), |inv| inv * f)
+        // Cramer's rule with one division (an inverse would take four).
+        let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+        if det == 0.0 {
+            return Vector2::repeat(f64::NAN);
+        }
+        let inv_det = 1.0 / det;
+        Vector2::new(
+            (m[(1, 1)] * f[0] - m[(0, 1)] * f[1]) * inv_det,
+            (m[(0, 0)] * f[1] - m[(1, 0)] * f[0]) * inv_det,
+        )
     }
 
     /// Accelerations (v̈1, ϑ̈1, ü2) of the DAE. NaN if A is singular.
@@ -371,6 +380,9 @@ fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
         [a[(1, 0)], a[(1, 1)], a[(1, 2)], b[1]],
         [a[(2, 0)], a[(2, 1)], a[(2, 2)], b[2]],
     ];
+    // The reciprocals of the pivots: the back substitution multiplies by them instead of
+    // dividing, so that its three steps do not each wait for a division.
+    let mut inv = [0.0; 3];
     for k in 0..3 {
         let p = (k..3).fold(k, |p, i| if m[i][k].abs() > m[p][k].abs() { i } else { p });
         m.swap(k, p);
@@ -378,17 +390,18 @@ fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
         if pivot == 0.0 || !pivot.is_finite() {
             return None;
         }
+        inv[k] = 1.0 / pivot;
         let row_k = m[k];
         for row in m.iter_mut().skip(k + 1) {
-            let f = row[k] / pivot;
+            let f = row[k] * inv[k];
             for (v, r) in row.iter_mut().zip(&row_k).skip(k) {
                 *v -= f * r;
             }
         }
     }
-    let x2 = m[2][3] / m[2][2];
-    let x1 = (m[1][3] - m[1][2] * x2) / m[1][1];
-    let x0 = (m[0][3] - m[0][1] * x1 - m[0][2] * x2) / m[0][0];
+    let x2 = m[2][3] * inv[2];
+    let x1 = (m[1][3] - m[1][2] * x2) * inv[1];
+    let x0 = (m[0][3] - m[0][1] * x1 - m[0][2] * x2) * inv[0];
     Some(Vector3::new(x0, x1, x2))
 }
 

@@ -169,9 +169,10 @@ fn coeffs_q<const Q: usize>(h: f64, tau: &[f64; NCOL + 1], order_change: bool) -
     // the k-th factor only l_0..=l_k are non-zero, so the update stops there.
     let mut l = [0.0; NCOL];
     l[0] = 1.0;
-    for (k, &inv) in inv_xi.iter().enumerate().take(Q).skip(1) {
+    #[allow(clippy::needless_range_loop)] // index loops with constant bounds: they unroll
+    for k in 1..Q {
         for i in (1..=k).rev() {
-            l[i] += l[i - 1] * inv;
+            l[i] += l[i - 1] * inv_xi[k];
         }
     }
     // α0 = −Σ 1/j is the leading coefficient of the fixed-leading-coefficient formula;

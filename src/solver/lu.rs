@@ -9,14 +9,17 @@ use nalgebra::{SMatrix, SVector};
 
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Lu<const N: usize> {
-    /// L (unit lower, below the diagonal) and U (on and above it), row-permuted.
+    /// L (unit lower, below the diagonal) and U (above it), row-permuted; the diagonal holds
+    /// the reciprocals of U's pivots, so that a solve multiplies where it would divide (the
+    /// back substitution's divisions are a chain, each waiting for the one before).
     factors: SMatrix<f64, N, N>,
     /// Row `i` of the factors is row `perm[i]` of the original matrix.
     perm: [usize; N],
 }
 
 impl<const N: usize> Lu<N> {
-    /// Factors `a`; `None` if a pivot is zero, non-finite or below round-off of ‖a‖.
+    /// Factors `a`; `None` if a pivot is zero, non-finite or below round-off of ‖a‖, or its
+    /// reciprocal is not finite.
     pub(crate) fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
         let mut f = *a;
         let mut perm = [0usize; N];
@@ -40,9 +43,13 @@ impl<const N: usize> Lu<N> {
                 f.swap_rows(k, piv);
                 perm.swap(k, piv);
             }
-            let d = f[(k, k)];
+            let inv = 1.0 / f[(k, k)];
+            if !inv.is_finite() {
+                return None;
+            }
+            f[(k, k)] = inv;
             for i in k + 1..N {
-                let m = f[(i, k)] / d;
+                let m = f[(i, k)] * inv;
                 f[(i, k)] = m;
                 for j in k + 1..N {
                     f[(i, j)] -= m * f[(k, j)];
@@ -72,8 +79,8 @@ impl<const N: usize> Lu<N> {
         }
     }
 
-    /// What [`factor`](Self::factor) guarantees: finite factors, non-zero pivots, and a
-    /// permutation of 0..N (so [`solve`](Self::solve) indexes in range).
+    /// What [`factor`](Self::factor) guarantees: finite factors, non-zero (reciprocal)
+    /// pivots, and a permutation of 0..N (so [`solve`](Self::solve) indexes in range).
     pub(crate) fn check(&self) -> Result<(), SolverError> {
         require_finite(self.factors.iter(), "lu.factors")?;
         require((0..N).all(|i| self.factors[(i, i)] != 0.0), "lu.factors")?;
@@ -98,7 +105,7 @@ impl<const N: usize> Lu<N> {
             for j in i + 1..N {
                 x[i] -= f[(i, j)] * x[j];
             }
-            x[i] /= f[(i, i)];
+            x[i] *= f[(i, i)];
         }
         x
     }
