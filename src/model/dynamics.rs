@@ -374,6 +374,7 @@ fn static_equilibrium(force: impl Fn(Vector2<f64>) -> Vector2<f64>) -> (Vector2<
 /// x with A x = b by Gaussian elimination with partial pivoting, written out for 3×3 (the
 /// DAE right-hand side solves one per evaluation; nalgebra's generic LU costs several times
 /// as much). `None` if a pivot is zero or not finite.
+#[allow(clippy::needless_range_loop)]
 fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
     let mut m = [
         [a[(0, 0)], a[(0, 1)], a[(0, 2)], b[0]],
@@ -382,9 +383,16 @@ fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
     ];
     // The reciprocals of the pivots: the back substitution multiplies by them instead of
     // dividing, so that its three steps do not each wait for a division.
+    // Index loops with constant bounds: they unroll (iterator adaptors over the rows did
+    // not, at a few hundred instructions a solve).
     let mut inv = [0.0; 3];
     for k in 0..3 {
-        let p = (k..3).fold(k, |p, i| if m[i][k].abs() > m[p][k].abs() { i } else { p });
+        let mut p = k;
+        for i in k + 1..3 {
+            if m[i][k].abs() > m[p][k].abs() {
+                p = i;
+            }
+        }
         m.swap(k, p);
         let pivot = m[k][k];
         if pivot == 0.0 || !pivot.is_finite() {
@@ -392,10 +400,10 @@ fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
         }
         inv[k] = 1.0 / pivot;
         let row_k = m[k];
-        for row in m.iter_mut().skip(k + 1) {
-            let f = row[k] * inv[k];
-            for (v, r) in row.iter_mut().zip(&row_k).skip(k) {
-                *v -= f * r;
+        for i in k + 1..3 {
+            let f = m[i][k] * inv[k];
+            for j in k..4 {
+                m[i][j] -= f * row_k[j];
             }
         }
     }

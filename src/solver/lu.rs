@@ -4,76 +4,89 @@
 //! name, and this is twenty lines (Golub & Van Loan, *Matrix Computations*, alg. 3.4.1).
 
 use super::error::SolverError;
-use super::snapshot::{require, require_finite, visit_matrix, visit_usize, StateVisitor};
+use super::snapshot::{require, require_finite, visit_usize, StateVisitor};
 use nalgebra::{SMatrix, SVector};
 
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Lu<const N: usize> {
-    /// L (unit lower, below the diagonal) and U (above it), row-permuted; the diagonal holds
-    /// the reciprocals of U's pivots, so that a solve multiplies where it would divide (the
-    /// back substitution's divisions are a chain, each waiting for the one before).
-    factors: SMatrix<f64, N, N>,
+    /// The rows of L (unit lower, below the diagonal) and U (above it), row-permuted; the
+    /// diagonal holds the reciprocals of U's pivots, so that a solve multiplies where it
+    /// would divide (the back substitution's divisions are a chain, each waiting for the one
+    /// before). Plain rows rather than a matrix: a row swap moves one array, and the loops
+    /// index in bounds the compiler can see (nalgebra's indexing checks each access).
+    rows: [[f64; N]; N],
     /// Row `i` of the factors is row `perm[i]` of the original matrix.
     perm: [usize; N],
 }
 
+// Index loops with constant bounds throughout: they unroll, and the bounds checks go.
+#[allow(clippy::needless_range_loop)]
 impl<const N: usize> Lu<N> {
     /// Factors `a`; `None` if a pivot is zero, non-finite or below round-off of ‖a‖, or its
     /// reciprocal is not finite.
     pub(crate) fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
-        let mut f = *a;
-        let mut perm = [0usize; N];
-        for (i, p) in perm.iter_mut().enumerate() {
-            *p = i;
+        let mut f: [[f64; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| a[(i, j)]));
+        let mut perm: [usize; N] = std::array::from_fn(|i| i);
+        // max |a_ij|, NaN entries passed over (as f64::max does; the pivot test then refuses
+        // them), on the rows: nalgebra's matrix iterator cost ~20 instructions an element.
+        let mut scale = 0.0f64;
+        for x in f.iter().flatten() {
+            if x.abs() > scale {
+                scale = x.abs();
+            }
         }
-        let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let tiny = scale * f64::EPSILON * N as f64;
         for k in 0..N {
-            let (mut piv, mut best) = (k, f[(k, k)].abs());
+            let (mut piv, mut best) = (k, f[k][k].abs());
             for i in k + 1..N {
-                if f[(i, k)].abs() > best {
+                if f[i][k].abs() > best {
                     piv = i;
-                    best = f[(i, k)].abs();
+                    best = f[i][k].abs();
                 }
             }
             if !(best.is_finite() && best > tiny) {
                 return None;
             }
             if piv != k {
-                f.swap_rows(k, piv);
+                f.swap(k, piv);
                 perm.swap(k, piv);
             }
-            let inv = 1.0 / f[(k, k)];
+            let inv = 1.0 / f[k][k];
             if !inv.is_finite() {
                 return None;
             }
-            f[(k, k)] = inv;
+            f[k][k] = inv;
+            let pivot_row = f[k];
             for i in k + 1..N {
-                let m = f[(i, k)] * inv;
-                f[(i, k)] = m;
+                let m = f[i][k] * inv;
+                f[i][k] = m;
                 for j in k + 1..N {
-                    f[(i, j)] -= m * f[(k, j)];
+                    f[i][j] -= m * pivot_row[j];
                 }
             }
         }
-        Some(Self { factors: f, perm })
+        Some(Self { rows: f, perm })
     }
 
     /// A stand-in for the fields of an absent LU when a state is visited: zero factors and
     /// the identity permutation.
     pub(crate) fn placeholder() -> Self {
-        Self { factors: SMatrix::zeros(), perm: std::array::from_fn(|i| i) }
+        Self { rows: [[0.0; N]; N], perm: std::array::from_fn(|i| i) }
     }
 
     /// Whether this is bit for bit the [`placeholder`](Self::placeholder).
     pub(crate) fn is_placeholder(&self) -> bool {
-        self.factors.iter().all(|x| x.to_bits() == 0)
+        self.rows.iter().flatten().all(|x| x.to_bits() == 0)
             && self.perm.iter().enumerate().all(|(i, p)| *p == i)
     }
 
     /// Visits the factors (column-major), then the permutation.
     pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
-        visit_matrix(v, "lu.factors", &mut self.factors);
+        for j in 0..N {
+            for i in 0..N {
+                v.real("lu.factors", &mut self.rows[i][j]);
+            }
+        }
         for p in &mut self.perm {
             visit_usize(v, "lu.perm", p);
         }
@@ -82,8 +95,8 @@ impl<const N: usize> Lu<N> {
     /// What [`factor`](Self::factor) guarantees: finite factors, non-zero (reciprocal)
     /// pivots, and a permutation of 0..N (so [`solve`](Self::solve) indexes in range).
     pub(crate) fn check(&self) -> Result<(), SolverError> {
-        require_finite(self.factors.iter(), "lu.factors")?;
-        require((0..N).all(|i| self.factors[(i, i)] != 0.0), "lu.factors")?;
+        require_finite(self.rows.iter().flatten(), "lu.factors")?;
+        require((0..N).all(|i| self.rows[i][i] != 0.0), "lu.factors")?;
         let mut seen = [false; N];
         for &p in &self.perm {
             require(p < N && !seen[p], "lu.perm")?;
@@ -94,20 +107,20 @@ impl<const N: usize> Lu<N> {
 
     /// Solves `a x = b`.
     pub(crate) fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
-        let f = &self.factors;
-        let mut x = SVector::<f64, N>::from_fn(|i, _| b[self.perm[i]]);
+        let f = &self.rows;
+        let mut x: [f64; N] = std::array::from_fn(|i| b[self.perm[i]]);
         for i in 0..N {
             for j in 0..i {
-                x[i] -= f[(i, j)] * x[j];
+                x[i] -= f[i][j] * x[j];
             }
         }
         for i in (0..N).rev() {
             for j in i + 1..N {
-                x[i] -= f[(i, j)] * x[j];
+                x[i] -= f[i][j] * x[j];
             }
-            x[i] *= f[(i, i)];
+            x[i] *= f[i][i];
         }
-        x
+        SVector::from(x)
     }
 }
 
