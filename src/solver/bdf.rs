@@ -111,11 +111,10 @@ fn root_less((a, k): (f64, usize), (b, l): (f64, usize)) -> bool {
     }
 }
 
-/// Whether every element is finite, as `iter().all(is_finite)` decides: x·0 is 0 for a
-/// finite x and NaN for ±∞ and NaN, and a sum is NaN if a term is. Branch-free, so it
-/// vectorizes (the right-hand side's check at every Newton iteration).
+/// Whether every element is finite, as `iter().all(is_finite)` decides, without its early
+/// exit: branch-free, so that it vectorizes.
 fn all_finite(xs: &[f64]) -> bool {
-    xs.iter().fold(0.0, |sum, x| sum + x * 0.0) == 0.0
+    xs.iter().fold(true, |ok, x| ok & x.is_finite())
 }
 
 /// x^(1/k), by square roots where they serve (k = 1, 2, 4): a fraction of the cost of
@@ -427,11 +426,23 @@ impl<const N: usize> Bdf<N> {
             return Ok(self.zn[0]);
         }
         let s = (t - self.t) / self.hscale;
-        let mut y = self.zn[self.q];
-        for j in (0..self.q).rev() {
-            y = self.zn[j] + y * s;
-        }
-        Ok(y)
+        // Horner's scheme, the order a constant so that the loop unrolls.
+        let zn = &self.zn;
+        Ok(by_order!(self.q, Q => {
+            let mut y = zn[Q];
+            for j in (0..Q).rev() {
+                y = zn[j] + y * s;
+            }
+            y
+        }))
+    }
+
+    /// Whether `t` is not behind the last step `[t_n − h_u, t_n]` (to within round-off):
+    /// what [`advance`](Self::advance) accepts as a target without an error. A `t` in
+    /// `[t_n − h_u, t_n]` then needs no step, only [`interpolate`](Self::interpolate).
+    pub fn reaches_back_to(&self, t: f64) -> bool {
+        let lo = self.t - self.hu;
+        t >= lo - 100.0 * f64::EPSILON * (lo.abs() + self.hu)
     }
 
     /// Steps until `t ≥ tout`, never past `tstop` (use `tstop = tout` to end exactly there;
@@ -444,8 +455,7 @@ impl<const N: usize> Bdf<N> {
         tstop: f64,
     ) -> Result<(), SolverError> {
         // A target behind t is fine while it lies in the last step (dense output serves it).
-        let lo = self.t - self.hu;
-        if tout < lo - 100.0 * f64::EPSILON * (lo.abs() + self.hu) {
+        if !self.reaches_back_to(tout) {
             return Err(SolverError::TimeBehind { t: self.t, target: tout });
         }
         let mut taken = 0u64;
@@ -956,9 +966,9 @@ impl<const N: usize> Bdf<N> {
             let f = sys.rhs(self.t, &y);
             self.stats.rhs_evals += 1;
             self.stats.newton_iters += 1;
-            if !all_finite(f.as_slice()) {
-                return Err(NewtonFail::NonFinite);
-            }
+            // A non-finite f needs no test of its own: ±∞ or NaN in f gives ±∞ or NaN in the
+            // residual, the solve carries it into Δ (no product or sum makes it finite again),
+            // and the test of ‖Δ‖ below fails in this same iteration.
             let residual = f * self.gamma - (self.zn[1] * inv_l1 + acor);
             let delta = lu.solve(&residual) * scale;
             acor += delta;
