@@ -8,7 +8,7 @@ use super::snapshot::{require, require_finite, visit_usize, StateVisitor};
 use nalgebra::{SMatrix, SVector};
 
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Lu<const N: usize> {
+pub struct Lu<const N: usize> {
     /// The rows of L (unit lower, below the diagonal) and U (above it), row-permuted; the
     /// diagonal holds the reciprocals of U's pivots, so that a solve multiplies where it
     /// would divide (the back substitution's divisions are a chain, each waiting for the one
@@ -24,7 +24,7 @@ pub(crate) struct Lu<const N: usize> {
 impl<const N: usize> Lu<N> {
     /// Factors `a`; `None` if a pivot is zero, non-finite or below round-off of ‖a‖, or its
     /// reciprocal is not finite.
-    pub(crate) fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
+    pub fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
         let mut f: [[f64; N]; N] = std::array::from_fn(|i| std::array::from_fn(|j| a[(i, j)]));
         let mut perm: [usize; N] = std::array::from_fn(|i| i);
         // max |a_ij|, NaN entries passed over (as f64::max does; the pivot test then refuses
@@ -106,7 +106,7 @@ impl<const N: usize> Lu<N> {
     }
 
     /// Solves `a x = b`.
-    pub(crate) fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+    pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
         let f = &self.rows;
         let mut x: [f64; N] = std::array::from_fn(|i| b[self.perm[i]]);
         for i in 0..N {

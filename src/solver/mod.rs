@@ -50,6 +50,10 @@ pub use bdf::{Bdf, StepOutcome};
 pub use config::{check_rtol, BdfConfig, FixedStep};
 pub use error::SolverError;
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
+/// The Newton matrix's LU, public only so that the benchmark can price a factorisation and a
+/// solve as the integrator does them (`cargo xtask bench`, costs.csv).
+#[doc(hidden)]
+pub use lu::Lu;
 pub(crate) use snapshot::visit_usize;
 pub use snapshot::StateVisitor;
 pub use stats::Stats;

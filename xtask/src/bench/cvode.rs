@@ -53,7 +53,7 @@ use beam_body::solver::OdeSystem;
 use libloading::Library;
 use nalgebra::SVector;
 
-use super::problem::{with_system, Counters, Outcome, Problem, WithSystem};
+use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
 
 /// The soname of CVODE 6 (Debian's `libsundials-cvode6`).
 const LIBRARY: &str = "libsundials_cvode.so.6";
@@ -656,11 +656,10 @@ where
     s.check(unsafe { (api.set_stop_time)(s.mem, stop) }, "CVodeSetStopTime", &log)?;
 
     let mut work = Work::default();
-    let mut states = Vec::with_capacity(problem.grid.len());
-    let row = |t: f64, y: SVector<f64, N>, data: &UserData<S>| -> Vec<f64> {
+    let mut states = States::with_capacity(problem.grid.len());
+    let row = |t: f64, y: SVector<f64, N>, data: &UserData<S>| -> SVector<f64, N> {
         // The driver's outputs are projected too (`DaeSystem::outputs`).
-        let y = data.system.get().project(t, &y).unwrap_or(y);
-        y.as_slice().to_vec()
+        data.system.get().project(t, &y).unwrap_or(y)
     };
     let advance = |s: &Session, t: f64| -> Result<SVector<f64, N>, String> {
         let mut tret = 0.0;
@@ -675,7 +674,7 @@ where
     };
     for &t in &problem.grid {
         if t <= t0 {
-            states.push(row(t, y0, &data));
+            states.push(row(t, y0, &data).as_slice());
             continue;
         }
         if before_breakpoint && t >= bp {
@@ -690,12 +689,12 @@ where
             }
             before_breakpoint = false;
             if t == bp {
-                states.push(row(t, y, &data));
+                states.push(row(t, y, &data).as_slice());
                 continue;
             }
         }
         let y = advance(&s, t)?;
-        states.push(row(t, y, &data));
+        states.push(row(t, y, &data).as_slice());
     }
     work.add(s.work(projecting));
     if projecting && work.proj_evals < work.steps {
@@ -754,7 +753,8 @@ mod tests {
             let p = problem(scene).unwrap();
             let out = run(&p, 1e-8).unwrap();
             assert_eq!(out.states.len(), p.grid.len());
-            let dv = max_abs_diff(&out.states, &ours(&p, 1e-8), 0);
+            let rows: Vec<Vec<f64>> = out.states.rows().map(<[f64]>::to_vec).collect();
+            let dv = max_abs_diff(&rows, &ours(&p, 1e-8), 0);
             eprintln!("{scene}: max |Δv1| = {dv:.3e}, {:?}", out.counters.steps);
             assert!(dv < 1e-5, "{scene}: max |Δv1| = {dv:e}");
             let c = out.counters;

@@ -33,7 +33,7 @@ use diffsol::{
 };
 use nalgebra::SVector;
 
-use super::problem::{with_system, Counters, Outcome, Problem, WithSystem};
+use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
 
 /// Solves `problem` with diffsol's BDF at `rtol`, atol = 1e-3·rtol for every state.
 pub fn run(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
@@ -104,9 +104,9 @@ where
     }
     bounds.push(t_end);
 
-    let mut states = Vec::with_capacity(grid.len());
+    let mut states = States::with_capacity(grid.len());
     let first = system(law.piece_from(t0));
-    states.push(row(&first, t0, y0));
+    states.push(row(&first, t0, y0).as_slice());
     let mut work = Work::default();
     let mut y = y0;
     for w in bounds.windows(2) {
@@ -118,8 +118,8 @@ where
 }
 
 /// A grid row: the state, projected where the system projects (`DaeSystem::outputs`).
-fn row<S: OdeSystem<N>, const N: usize>(system: &S, t: f64, y: SVector<f64, N>) -> Vec<f64> {
-    system.project(t, &y).unwrap_or(y).as_slice().to_vec()
+fn row<S: OdeSystem<N>, const N: usize>(system: &S, t: f64, y: SVector<f64, N>) -> SVector<f64, N> {
+    system.project(t, &y).unwrap_or(y)
 }
 
 /// The point of a finite-difference Jacobian and f there: (t, x, f(t, x)).
@@ -135,7 +135,7 @@ fn segment<S: OdeSystem<N> + Copy, const N: usize>(
     t1: f64,
     rtol: f64,
     times: &[f64],
-    states: &mut Vec<Vec<f64>>,
+    states: &mut States,
     work: &mut Work,
 ) -> Result<SVector<f64, N>, String> {
     let err = |e: diffsol::error::DiffsolError| format!("diffsol: {e}");
@@ -199,7 +199,7 @@ fn segment<S: OdeSystem<N> + Copy, const N: usize>(
             solver.interpolate_inplace(t, &mut buffer).map_err(err)?;
             read(&buffer)
         };
-        states.push(row(&system, t, y));
+        states.push(row(&system, t, y).as_slice());
     }
     while !reached {
         reached = matches!(solver.step().map_err(err)?, OdeSolverStopReason::TstopReached);
@@ -234,7 +234,7 @@ mod tests {
             let mut v1 = Vec::new();
             simulate(&ours, |o| v1.push(o.v1)).unwrap();
             assert_eq!(v1.len(), p.grid.len());
-            let dv = out.states.iter().zip(&v1).map(|(y, v)| (y[0] - v).abs()).fold(0.0, f64::max);
+            let dv = out.states.rows().zip(&v1).map(|(y, v)| (y[0] - v).abs()).fold(0.0, f64::max);
             eprintln!("{scene}: max |Δv1| = {dv:.3e}, {:?} steps", out.counters.steps);
             assert!(dv < 1e-5, "{scene}: max |Δv1| = {dv:e}");
             let c = out.counters;

@@ -14,7 +14,7 @@ use beam_body::fmi2::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SO
 use beam_body::model::Formulation;
 use beam_body::sim::Scene;
 
-use super::problem::{Counters, Outcome, Problem};
+use super::problem::{Counters, Outcome, Problem, States};
 use crate::import::{Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
 use crate::{relative, target_dir, Result};
 
@@ -131,11 +131,11 @@ fn solve(fmu: &Fmu2, problem: &Problem, rtol: f64, h: f64) -> Result<Outcome> {
     instance.enter_initialization_mode().call("fmi2EnterInitializationMode")?;
     instance.exit_initialization_mode().call("fmi2ExitInitializationMode")?;
 
-    let mut states = Vec::with_capacity(problem.grid.len());
+    let mut states = States::with_capacity(problem.grid.len());
+    let mut row = vec![0.0; vrs.len()];
     let mut read = |instance: &mut InstanceCS| -> Result {
-        let mut row = vec![0.0; vrs.len()];
         instance.get_real(&vrs, &mut row).call("fmi2GetReal")?;
-        states.push(row);
+        states.push(&row);
         Ok(())
     };
     read(&mut instance)?;

@@ -5,7 +5,7 @@
 use beam_body::sim::{Run, Scene};
 use beam_body::solver::{FixedStep, Stats};
 
-use super::problem::{Counters, Outcome, Problem};
+use super::problem::{Counters, Outcome, Problem, States};
 
 /// The order of `bdf-fixed`. The paper (Russkikh & Shklyarchuk 2020, §4) says only "BDF in
 /// PTC MathCad 15.0 with a constant step Δτ = 1e-5"; it names no order. We use BDF2, the
@@ -45,11 +45,11 @@ fn solve(problem: &Problem, scene: &Scene) -> Result<Outcome, String> {
     let (law, init) = (scene.law, scene.initial);
     let mut run = Run::with_law(model, scene.formulation, &scene.solver, 0.0, init, law)
         .map_err(|err| err.to_string())?;
-    let mut states = Vec::with_capacity(problem.grid.len());
+    let mut states = States::with_capacity(problem.grid.len());
     let mut y = [0.0; 6];
     run.step_to_sampling(scene.t_end, problem.grid.iter().copied(), |run, t| {
         let n = run.state_at(t, &mut y)?;
-        states.push(y[..n].to_vec());
+        states.push(&y[..n]);
         Ok(())
     })
     .map_err(|err| err.to_string())?;
