@@ -10,6 +10,7 @@
 // reports on this machine, while the library uses `beam_body::math` (clippy.toml).
 #![allow(clippy::disallowed_methods)]
 
+mod ab;
 mod bench;
 mod docs;
 mod figures;
@@ -89,6 +90,15 @@ Commands:
           with --features bench): run the cases of target/bench/cases.csv in an order
           shuffled with seed K and append to target/bench/raw.csv; round 0 (the warm-up)
           also writes the solutions (target/bench/sol/) and target/bench/costs.csv.
+  bench-ab [REV] [--rounds R] [--sample SCENE FORMULATION RTOL]
+          The time per step of the library at git revision REV (default HEAD) against
+          the working tree's: a small runner (xtask/ab/runner.rs) built against each
+          (target/ab/), both run at the same time, one per core, swapping cores and
+          start order every round; ten cases (paper, paper-dae, paper-dae-stabilized at
+          rtol 1e-4, 1e-6, 1e-8; stiff at 1e-4); the median per case over R rounds
+          (default 8) and the ratio REV / tree. --sample: the working tree's runner
+          alone on one case (e.g. paper reduced 1e-6) for 40 s under SIGPROF, the
+          time by line of src/.
   sweep [--quick | --group NAME]
           Stiff and extreme cases (first cut; target/sweep/sweep.{csv,md}): stiffness,
           mass, turn, gravity, tolerance, guard, horizon, communication and phi step
@@ -178,6 +188,7 @@ fn run(args: &[String]) -> Result {
         },
         "bench" => bench::run(Mode::parse(command, options)?),
         "bench-run" => bench::run_round(bench::parse_round(options)?),
+        "bench-ab" => ab::run(options),
         "bench-dostep" => bench::run_dostep(Mode::parse(command, options)?),
         "sweep" => sweep::run(options),
         "sweep-case" => sweep::run_case(options),
