@@ -73,11 +73,23 @@ pub fn run(options: &[String]) -> Result {
     compare(&options, &rev, &tree)
 }
 
-/// `git worktree` at `rev` in `path` (made or moved there).
+/// `git worktree` at `rev` in `path` (made or moved there). The revision is resolved in the
+/// repository first: inside the worktree, HEAD would name the worktree's own.
 fn checkout(root: &Path, path: &Path, rev: &str) -> Result {
     let git = |args: &[&str], dir: &Path| -> Result {
         run_cmd(Command::new("git").arg("-C").arg(dir).args(args))
     };
+    let resolved = Command::new("git")
+        .arg("-C")
+        .arg(root)
+        .args(["rev-parse", "--verify", &format!("{rev}^{{commit}}")])
+        .output()
+        .map_err(|e| format!("git rev-parse: {e}"))?;
+    if !resolved.status.success() {
+        return Err(format!("`{rev}` is not a commit of this repository").into());
+    }
+    let sha = String::from_utf8_lossy(&resolved.stdout).trim().to_string();
+    let rev = sha.as_str();
     if path.join(".git").exists() {
         git(&["checkout", "--quiet", "--detach", rev], path)
     } else {
