@@ -193,6 +193,19 @@ enum NewtonFail {
     Singular,
 }
 
+/// See [`Bdf::derived`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct NewtonScalars {
+    /// γ / γ of the LU (1 without an LU).
+    gamma_ratio: f64,
+    /// The update's scale for a stale γ in the LU: 2/(1 + γ ratio) (CVODE cvLsSolve).
+    scale: f64,
+    /// 1 / l_1.
+    inv_l1: f64,
+    /// The bound on the iteration's weighted correction, NEWTON_COEF / tq[2].
+    tol: f64,
+}
+
 /// Failed attempts of the current step, by kind.
 #[derive(Default)]
 struct Failures {
@@ -242,6 +255,11 @@ pub struct Bdf<const N: usize> {
     lu: Option<Lu<N>>,
     gamma: f64,
     gamma_lu: f64,
+    /// What the Newton iteration derives from γ, γ of the LU and the coefficients, which
+    /// change only with the step or the order or at a factorisation: kept, so that an
+    /// attempt does not divide to get them again. Not part of a saved state (reading one
+    /// derives them).
+    derived: NewtonScalars,
     rate: f64,
     steps_at_lu: u64,
     steps_at_jac: u64,
@@ -262,7 +280,7 @@ impl<const N: usize> Bdf<N> {
         }
         let mut zn = [SVector::zeros(); NCOL];
         zn[0] = y0;
-        Ok(Self {
+        let mut bdf = Self {
             atol: SVector::from_element(cfg.atol()),
             cfg,
             t: t0,
@@ -286,6 +304,7 @@ impl<const N: usize> Bdf<N> {
             lu: None,
             gamma: 0.0,
             gamma_lu: 0.0,
+            derived: NewtonScalars::default(),
             rate: 1.0,
             steps_at_lu: 0,
             steps_at_jac: 0,
@@ -293,7 +312,10 @@ impl<const N: usize> Bdf<N> {
             started: false,
             landing: None,
             stats: Stats::default(),
-        })
+        };
+        // What the (empty) coefficients and γ give, as a state read back would have.
+        bdf.derive_from_coeffs();
+        Ok(bdf)
     }
 
     /// A different absolute tolerance for each state, each positive and finite (the uniform
@@ -325,6 +347,7 @@ impl<const N: usize> Bdf<N> {
         self.qu = 0;
         self.eta_max = ETA_MAX_FIRST;
         self.lu = None;
+        self.derive_gamma_ratio();
         self.started = false;
         self.landing = None;
         Ok(())
@@ -370,6 +393,7 @@ impl<const N: usize> Bdf<N> {
         self.h_next = h;
         self.hu = 0.0;
         self.lu = None;
+        self.derive_gamma_ratio();
         self.started = true;
         self.update_weights();
         Ok(())
@@ -701,6 +725,8 @@ impl<const N: usize> Bdf<N> {
         self.lu = has_lu.then_some(lu);
         v.real("gamma", &mut self.gamma);
         v.real("gamma_lu", &mut self.gamma_lu);
+        // Derived, not visited: what a reader stored gives them.
+        self.derive_from_coeffs();
         v.real("rate", &mut self.rate);
         v.count("steps_at_lu", &mut self.steps_at_lu);
         v.count("steps_at_jac", &mut self.steps_at_jac);
@@ -911,9 +937,27 @@ impl<const N: usize> Bdf<N> {
         }
     }
 
+    /// The coefficients of the attempt, and γ = h/l_1 with what the Newton iteration derives
+    /// from it, when the step, the order or the past steps changed.
     fn set_coeffs(&mut self) {
-        self.coeffs.update(self.q, self.h, &self.tau, self.qwait == 1);
-        self.gamma = self.h / self.coeffs.l[1];
+        if self.coeffs.update(self.q, self.h, &self.tau, self.qwait == 1) {
+            self.gamma = self.h / self.coeffs.l[1];
+            self.derive_from_coeffs();
+        }
+    }
+
+    /// [`NewtonScalars`] from γ, γ of the LU and the coefficients.
+    fn derive_from_coeffs(&mut self) {
+        self.derived.inv_l1 = 1.0 / self.coeffs.l[1];
+        self.derived.tol = NEWTON_COEF / self.coeffs.tq[2];
+        self.derive_gamma_ratio();
+    }
+
+    /// The γ ratio and the update's scale of [`NewtonScalars`].
+    fn derive_gamma_ratio(&mut self) {
+        let ratio = if self.lu.is_some() { self.gamma / self.gamma_lu } else { 1.0 };
+        self.derived.gamma_ratio = ratio;
+        self.derived.scale = if ratio != 1.0 { 2.0 / (1.0 + ratio) } else { 1.0 };
     }
 
     // ----- Newton -------------------------------------------------------------------------
@@ -926,7 +970,7 @@ impl<const N: usize> Bdf<N> {
         mut conv_fail: ConvFail,
     ) -> Result<(), NewtonFail> {
         loop {
-            let gamma_ratio = if self.lu.is_some() { self.gamma / self.gamma_lu } else { 1.0 };
+            let gamma_ratio = self.derived.gamma_ratio;
             let needs_setup = self.lu.is_none()
                 || conv_fail != ConvFail::None
                 || self.stats.steps >= self.steps_at_lu + REFACTOR_STEPS
@@ -954,11 +998,8 @@ impl<const N: usize> Bdf<N> {
 
     fn newton_iterate<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
         let lu = self.lu.as_ref().ok_or(NewtonFail::Singular)?;
-        let gamma_ratio = self.gamma / self.gamma_lu;
         // A stale γ in the LU is corrected by scaling the update (CVODE cvLsSolve for BDF).
-        let scale = if gamma_ratio != 1.0 { 2.0 / (1.0 + gamma_ratio) } else { 1.0 };
-        let inv_l1 = 1.0 / self.coeffs.l[1];
-        let tol = NEWTON_COEF / self.coeffs.tq[2];
+        let NewtonScalars { scale, inv_l1, tol, .. } = self.derived;
         let mut acor = SVector::<f64, N>::zeros();
         let mut y = self.zn[0];
         let mut del_prev = 0.0;
@@ -1047,6 +1088,7 @@ impl<const N: usize> Bdf<N> {
         self.stats.lu_factorizations += 1;
         self.steps_at_lu = self.stats.steps;
         self.gamma_lu = self.gamma;
+        self.derive_gamma_ratio();
         self.rate = 1.0;
         self.lu.as_ref().map(|_| ()).ok_or(NewtonFail::Singular)
     }

@@ -126,13 +126,26 @@ impl StepCoeffs {
     /// keeping them when they were computed for the same order, steps and `order_change`
     /// (in place: this runs at every step attempt).
     ///
-    /// `order_change` asks for tq[1] and tq[3], which need one more past step.
-    pub(crate) fn update(&mut self, q: usize, h: f64, tau: &[f64; NCOL + 1], order_change: bool) {
+    /// `order_change` asks for tq[1] and tq[3], which need one more past step. Returns
+    /// whether the coefficients were computed anew (else they are the ones of the same
+    /// order, step and past steps).
+    pub(crate) fn update(
+        &mut self,
+        q: usize,
+        h: f64,
+        tau: &[f64; NCOL + 1],
+        order_change: bool,
+    ) -> bool {
         debug_assert!((1..=QMAX).contains(&q));
-        by_order!(q, Q => self.update_q::<Q>(h, tau, order_change));
+        by_order!(q, Q => self.update_q::<Q>(h, tau, order_change))
     }
 
-    fn update_q<const Q: usize>(&mut self, h: f64, tau: &[f64; NCOL + 1], order_change: bool) {
+    fn update_q<const Q: usize>(
+        &mut self,
+        h: f64,
+        tau: &[f64; NCOL + 1],
+        order_change: bool,
+    ) -> bool {
         // Coefficients computed with tq[1] and tq[3] serve a step that does not need them:
         // the order change is considered every other step, so this keeps the cache warm.
         // The key holds τ_1..=τ_q, the steps that ξ_2..=ξ_{q+1} are made of.
@@ -141,9 +154,10 @@ impl StepCoeffs {
             && self.key_tau[..Q] == tau[1..=Q]
             && (self.key_order_change || !order_change)
         {
-            return;
+            return false;
         }
         *self = coeffs_q::<Q>(h, tau, order_change);
+        true
     }
 }
 
