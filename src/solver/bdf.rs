@@ -1002,7 +1002,7 @@ impl<const N: usize> Bdf<N> {
         let NewtonScalars { scale, inv_l1, tol, .. } = self.derived;
         let mut acor = SVector::<f64, N>::zeros();
         let mut y = self.zn[0];
-        let mut del_prev = 0.0;
+        let mut del2_prev = 0.0;
         for m in 0..NEWTON_MAX_ITERS {
             let f = sys.rhs(self.t, &y);
             self.stats.rhs_evals += 1;
@@ -1014,21 +1014,24 @@ impl<const N: usize> Bdf<N> {
             let delta = lu.solve(&residual) * scale;
             acor += delta;
             y = self.zn[0] + acor;
-            let del = self.wrms(&delta);
-            if !del.is_finite() {
+            // The tests on squares: no square root on the iteration's chain (the one root
+            // left, of the ratio, is taken from the second iteration on).
+            let del2 = self.wrms_squared(&delta);
+            if !del2.is_finite() {
                 return Err(NewtonFail::NonFinite);
             }
             if m > 0 {
-                self.rate = (RATE_DAMPING * self.rate).max(del / del_prev);
+                self.rate = (RATE_DAMPING * self.rate).max((del2 / del2_prev).sqrt());
             }
-            if del * self.rate.min(1.0) <= tol {
+            let damped = self.rate.min(1.0);
+            if del2 * (damped * damped) <= tol * tol {
                 self.acor = acor;
                 return Ok(());
             }
-            if m > 0 && del > DIVERGENCE_RATIO * del_prev {
+            if m > 0 && del2 > DIVERGENCE_RATIO * DIVERGENCE_RATIO * del2_prev {
                 break;
             }
-            del_prev = del;
+            del2_prev = del2;
         }
         Err(NewtonFail::Diverged)
     }
@@ -1289,8 +1292,13 @@ impl<const N: usize> Bdf<N> {
 
     /// Weighted root-mean-square norm with the current error weights.
     fn wrms(&self, v: &SVector<f64, N>) -> f64 {
+        self.wrms_squared(v).sqrt()
+    }
+
+    /// The square of [`wrms`](Self::wrms).
+    fn wrms_squared(&self, v: &SVector<f64, N>) -> f64 {
         let s: f64 = v.iter().zip(self.ewt.iter()).map(|(a, w)| (a * w) * (a * w)).sum();
-        (s / N as f64).sqrt()
+        s / N as f64
     }
 }
 
