@@ -450,15 +450,17 @@ impl<const N: usize> Bdf<N> {
             return Ok(self.zn[0]);
         }
         let s = (t - self.t) / self.hscale;
-        // Horner's scheme, the order a constant so that the loop unrolls.
-        let zn = &self.zn;
-        Ok(by_order!(self.q, Q => {
-            let mut y = zn[Q];
-            for j in (0..Q).rev() {
-                y = zn[j] + y * s;
-            }
-            y
-        }))
+        // Estrin's scheme: pairs z_j + s·z_{j+1} combined with powers of s², a chain of
+        // ⌈log2(q+1)⌉ levels instead of Horner's q.
+        let z = &self.zn;
+        let s2 = s * s;
+        Ok(match self.q {
+            1 => z[0] + z[1] * s,
+            2 => (z[0] + z[1] * s) + z[2] * s2,
+            3 => (z[0] + z[1] * s) + (z[2] + z[3] * s) * s2,
+            4 => (z[0] + z[1] * s) + ((z[2] + z[3] * s) + z[4] * s2) * s2,
+            _ => (z[0] + z[1] * s) + ((z[2] + z[3] * s) + (z[4] + z[5] * s) * s2) * s2,
+        })
     }
 
     /// Whether `t` is not behind the last step `[t_n − h_u, t_n]` (to within round-off):
