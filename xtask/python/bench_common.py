@@ -40,7 +40,7 @@ RAW_HEADER = (
     "newton_iters,status"
 ).split(",")
 CASES_HEADER = ["solver", "scene", "rtol", "h"]
-COSTS_HEADER = ["scene", "rhs_ns", "lu_ns", "solve_ns", "rhs_throughput_ns", "solve_throughput_ns"]
+COSTS_HEADER = ["round", "scene", "rhs_ns", "lu_ns", "solve_ns", "rhs_throughput_ns", "solve_throughput_ns"]
 
 
 def is_dae(formulation: str) -> bool:

@@ -262,11 +262,18 @@ def load_costs(d: Path, notes):
     if not p.is_file():
         notes.append("costs.csv missing: no lower bound and no overhead per step")
         return out
+    # One row per scene and round: the median over the timed rounds (round 0, the warm-up, only
+    # when there is nothing else), each price on its own.
+    keys = ("rhs_ns", "lu_ns", "solve_ns", "rhs_throughput_ns", "solve_throughput_ns")
+    rows = {}
     for r in bc.read_table(p, bc.COSTS_HEADER):
-        keys = ("rhs_ns", "lu_ns", "solve_ns", "rhs_throughput_ns", "solve_throughput_ns")
         v = [_float(r[k]) for k in keys]
         if all(x is not None for x in v):
-            out[r["scene"]] = dict(zip(keys, v))
+            rows.setdefault(r["scene"], []).append((r["round"] != "0", v))
+    for scene, measured in rows.items():
+        timed = [v for is_timed, v in measured if is_timed] or [v for _, v in measured]
+        out[scene] = {k: statistics.median(v[i] for v in timed) for i, k in enumerate(keys)}
+        out[scene]["rounds"] = len(timed)
     return out
 
 
@@ -504,7 +511,7 @@ def markdown(cases, curves, scenes, costs, ref_texts, notes, args, date, cores):
         L.append(f"{file_}, formulation {form}. Reference: max disagreement of its two methods "
                  f"{ref_disagreement(ref_texts.get(scene, ''))} (ref/{scene}.txt).")
         if cost:
-            L.append(f"Costs (Rust, costs.csv; each call waiting for the last, as in the Newton "
+            L.append(f"Costs (Rust, costs.csv, medians of {cost['rounds']} rounds; each call waiting for the last, as in the Newton "
                      f"iteration): right-hand side {cost['rhs_ns']:.4g} ns, LU factorisation "
                      f"{cost['lu_ns']:.4g} ns, LU solve {cost['solve_ns']:.4g} ns (independent calls: "
                      f"right-hand side {cost['rhs_throughput_ns']:.4g} ns, solve "

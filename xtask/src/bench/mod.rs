@@ -10,7 +10,9 @@
 //!   `bench-run` (the Rust solvers) and `xtask/python/bench_scipy.py` (SciPy).
 //! - `sol/<solver>__<scene>__<rtol>__<h>.csv` (`-` for an empty field): the solution on the
 //!   grid, written in round 0, the warm-up.
-//! - `costs.csv` (`scene,rhs_ns,lu_ns,solve_ns`): written by `bench-run` in round 0.
+//! - `costs.csv` (`round,scene,rhs_ns,lu_ns,solve_ns,rhs_throughput_ns,solve_throughput_ns`):
+//!   appended by `bench-run` after the cases of every round, so that the prices see the machine
+//!   as the timed solves do (the report takes their medians over the timed rounds).
 //! - `ref/` (the reference solutions, `xtask/python/bench_reference.py`) and the outputs
 //!   `work_precision.{csv,png,md}` (`xtask/python/bench_report.py`).
 //!
@@ -56,7 +58,8 @@ const SCIPY_SOLVERS: [&str; 3] = ["scipy-bdf", "scipy-radau", "scipy-lsoda"];
 const CASES_HEADER: &str = "solver,scene,rtol,h";
 const RAW_HEADER: &str = "round,solver,scene,rtol,h,time_s,steps,rejected,rhs_evals,jac_evals,\
                           lu_factorizations,newton_iters,status";
-const COSTS_HEADER: &str = "scene,rhs_ns,lu_ns,solve_ns,rhs_throughput_ns,solve_throughput_ns";
+const COSTS_HEADER: &str =
+    "round,scene,rhs_ns,lu_ns,solve_ns,rhs_throughput_ns,solve_throughput_ns";
 
 impl Mode {
     /// The time limit of one SciPy solve (`bench_scipy.py --max-seconds`).
@@ -578,12 +581,10 @@ pub fn run_round(round: u64) -> Result {
         total.as_secs_f64()
     );
 
-    if warm_up {
-        let mut scenes: Vec<&str> = cases.iter().map(|c| c.scene.as_str()).collect();
-        scenes.sort_unstable();
-        scenes.dedup();
-        write_costs(&dir.join("costs.csv"), &scenes)?;
-    }
+    let mut scenes: Vec<&str> = cases.iter().map(|c| c.scene.as_str()).collect();
+    scenes.sort_unstable();
+    scenes.dedup();
+    append_costs(&dir.join("costs.csv"), round, &scenes)?;
     Ok(())
 }
 
@@ -737,8 +738,8 @@ fn median_ns(mut f: impl FnMut()) -> f64 {
 /// nothing to wait for overlap (the `*_throughput_ns` columns, measured too: at N = 4 the
 /// solve is 2-3 times cheaper that way). Until 2026-12-03 the costs were those of
 /// independent calls, and nalgebra's LU stood in for ours (its solve cost 3-7 times ours).
-fn write_costs(path: &Path, scenes: &[&str]) -> Result {
-    let mut text = format!("{COSTS_HEADER}\n");
+fn append_costs(path: &Path, round: u64, scenes: &[&str]) -> Result {
+    let mut text = if path.exists() { String::new() } else { format!("{COSTS_HEADER}\n") };
     for scene in scenes {
         let problem = problem::problem(scene)?;
         let s = &problem.scene;
@@ -768,17 +769,24 @@ fn write_costs(path: &Path, scenes: &[&str]) -> Result {
         };
         writeln!(
             text,
-            "{scene},{:.2},{:.2},{:.2},{:.2},{:.2}",
+            "{round},{scene},{:.2},{:.2},{:.2},{:.2},{:.2}",
             c.rhs, c.lu, c.solve, c.rhs_throughput, c.solve_throughput
         )
         .expect("String");
-        eprintln!(
-            "  costs {}: rhs {:.1} ns (independent calls {:.1}), LU {:.1} ns, solve {:.1} ns \
-             (independent calls {:.1})",
-            problem.name, c.rhs, c.rhs_throughput, c.lu, c.solve, c.solve_throughput
-        );
+        if round == 0 {
+            eprintln!(
+                "  costs {}: rhs {:.1} ns (independent calls {:.1}), LU {:.1} ns, solve {:.1} ns \
+                 (independent calls {:.1})",
+                problem.name, c.rhs, c.rhs_throughput, c.lu, c.solve, c.solve_throughput
+            );
+        }
     }
-    write_text(path, &text)
+    let mut file = fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .map_err(|err| format!("cannot open {}: {err}", relative(path)))?;
+    file.write_all(text.as_bytes()).map_err(|err| format!("{}: {err}", relative(path)).into())
 }
 
 /// The prices of [`write_costs`], in ns.

@@ -99,7 +99,15 @@ impl States {
     }
 
     pub fn push(&mut self, row: &[f64]) {
-        self.values.extend_from_slice(row);
+        // The formulations' widths copied as fixed-size arrays: a slice of a length known only
+        // at run time is copied by a call to the C library's memcpy.
+        match <&[f64; 4]>::try_from(row) {
+            Ok(four) => self.values.extend_from_slice(four),
+            Err(_) => match <&[f64; 6]>::try_from(row) {
+                Ok(six) => self.values.extend_from_slice(six),
+                Err(_) => self.values.extend_from_slice(row),
+            },
+        }
         self.widths.push(row.len());
     }
 
@@ -178,5 +186,16 @@ mod tests {
         assert_eq!(p.scene.formulation, Formulation::Reduced);
         assert_eq!(state_names(Formulation::Dae).len(), 6);
         assert!(problem("nope").is_err());
+    }
+
+    #[test]
+    fn states_give_back_their_rows() {
+        let rows: [&[f64]; 4] = [&[1.0, 2.0, 3.0, 4.0], &[5.0; 6], &[7.0, 8.0], &[]];
+        let mut states = States::with_capacity(2);
+        for row in rows {
+            states.push(row);
+        }
+        assert_eq!(states.len(), 4);
+        assert!(states.rows().eq(rows.iter().copied()));
     }
 }
