@@ -132,12 +132,15 @@ fn dae_drift_is_reported_and_bounded() {
     assert!(s6 <= 1e-16, "stabilized drift {s6}");
 }
 
-/// Where the drift grows past l/10 (rtol 1e-2 on the paper's scene: 0.73 m by t = 10.2 s
+/// Where the drift grows past l/10 (rtol 2e-2 on the paper's scene: 1.48 m by t = 10.2 s
 /// unchecked), the unprojected DAE stops with a message naming the drift and its bound; the
-/// stabilised variant runs the same scene to the end.
+/// stabilised variant runs the same scene to the end. (The drift at so loose a tolerance is a
+/// sum of local errors of either sign: at rtol 1e-2 it was 0.71 m until the step choice of
+/// issue 16 moved the last bits of some decisions, and is 0.09 m since; at 2e-2 it was 1.53 m
+/// and is 1.48 m.)
 #[test]
 fn dae_drift_beyond_a_tenth_of_the_length_stops_the_run() {
-    let scene = |form: &str| with(paper(), &[("formulation", form), ("rtol", "1e-2")]);
+    let scene = |form: &str| with(paper(), &[("formulation", form), ("rtol", "2e-2")]);
     let mut last = None;
     let err = simulate(&scene("dae"), |o| last = Some(*o)).unwrap_err().to_string();
     assert!(err.contains("drift = ") && err.contains("<= l/10"), "{err}");

@@ -80,7 +80,7 @@ fn ratio_at_least(bias_err: f64, exponent: usize, eta: f64) -> bool {
 }
 
 /// (1/ETA_THRESHOLD − ADDON)^k for k = 0..=QMAX + 2, by the multiplications of
-/// [`math::powi`], so that [`grows`] decides as `ratio_at_least(.., ETA_THRESHOLD)` does.
+/// [`math::powi`], so that [`grows_sq`] decides as `ratio_at_least(.., ETA_THRESHOLD)` does.
 const GROWTH_BOUNDS: [f64; QMAX + 3] = {
     let base = 1.0 / ETA_THRESHOLD - ADDON;
     let mut table = [0.0; QMAX + 3];
@@ -92,10 +92,14 @@ const GROWTH_BOUNDS: [f64; QMAX + 3] = {
     table
 };
 
-/// Whether the step ratio for `bias_err` = bias·err and `exponent` reaches ETA_THRESHOLD,
-/// the least growth that changes the step: `ratio_at_least` with the power from a table.
-fn grows((bias_err, exponent): (f64, usize)) -> bool {
-    bias_err <= GROWTH_BOUNDS[exponent.min(QMAX + 2)]
+/// Whether the step ratio for `bias_err_sq` = (bias·err)² and `exponent` reaches
+/// ETA_THRESHOLD, the least growth that changes the step: (bias·err)² ≤
+/// ((1/ETA_THRESHOLD − ADDON)^exponent)², the power from a table, on squares so that the
+/// weighted norm needs no square root. It decides as `ratio_at_least(.., ETA_THRESHOLD)`
+/// does, but at ties within round-off.
+fn grows_sq((bias_err_sq, exponent): (f64, usize)) -> bool {
+    let bound = GROWTH_BOUNDS[exponent.min(QMAX + 2)];
+    bias_err_sq <= bound * bound
 }
 
 /// Whether a^(1/k) < b^(1/l) for (a, k) and (b, l), a and b ≥ 0 or infinite: as
@@ -539,7 +543,7 @@ impl<const N: usize> Bdf<N> {
         }
         let mut failures = Failures::default();
         let mut conv_fail = ConvFail::None;
-        let dsm = loop {
+        let dsm_sq = loop {
             self.check_step_size()?;
             let t_prior = self.t;
             self.predict();
@@ -550,9 +554,9 @@ impl<const N: usize> Bdf<N> {
                 conv_fail = ConvFail::Other;
                 continue;
             }
-            let dsm = self.local_error(sys);
-            if dsm <= 1.0 || self.cfg.fixed_step.is_some() {
-                break dsm;
+            let dsm_sq = self.local_error(sys);
+            if dsm_sq <= 1.0 || self.cfg.fixed_step.is_some() {
+                break dsm_sq;
             }
             self.restore(t_prior);
             if probe && failures.error_test == 0 {
@@ -560,11 +564,11 @@ impl<const N: usize> Bdf<N> {
                 self.landing = None;
                 return Ok(StepOutcome::Rejected);
             }
-            self.handle_error_test_failure(sys, dsm, &mut failures)?;
+            self.handle_error_test_failure(sys, dsm_sq.sqrt(), &mut failures)?;
             conv_fail = ConvFail::ErrorTest;
         };
         self.complete_step();
-        self.choose_next(dsm);
+        self.choose_next(dsm_sq);
         self.eta_max = ETA_MAX;
         let outcome = if self.landing.take().is_some() {
             StepOutcome::ReachedStop
@@ -604,7 +608,9 @@ impl<const N: usize> Bdf<N> {
         Ok(())
     }
 
-    /// The weighted norm of the step's local error estimate, in units of the tolerance.
+    /// The square of the weighted norm of the step's local error estimate, in units of the
+    /// tolerance (squared: the error test and the common case of the step choice need no
+    /// square root).
     ///
     /// Projection (CVODE's cvDoProjection): the Nordsieck array takes the projected solution,
     /// and the error test measures the local error estimate projected onto the manifold
@@ -616,7 +622,8 @@ impl<const N: usize> Bdf<N> {
             projected_error = sys.project(self.t, &(yp + self.acor)).map(|y| y - yp);
             self.acor = yp - self.zn[0];
         }
-        self.wrms(projected_error.as_ref().unwrap_or(&self.acor)) * self.coeffs.tq[2]
+        let tq2 = self.coeffs.tq[2];
+        self.wrms_squared(projected_error.as_ref().unwrap_or(&self.acor)) * (tq2 * tq2)
     }
 
     /// After a failed error test (CVODE cvDoErrorTest's failure branch): gives up after
@@ -1139,7 +1146,7 @@ impl<const N: usize> Bdf<N> {
     /// Chooses the order and step of the next step from the error estimates at orders q−1,
     /// q and q+1 (CVODE cvPrepareNextStep / cvChooseEta / cvSetEta), then applies the
     /// stability guard.
-    fn choose_next(&mut self, dsm: f64) {
+    fn choose_next(&mut self, dsm_sq: f64) {
         if let Some(fixed) = self.cfg.fixed_step {
             self.h_next = fixed.h;
             self.q_next = (self.q + 1).min(fixed.order);
@@ -1148,10 +1155,10 @@ impl<const N: usize> Bdf<N> {
         let (mut q_next, mut eta) = (self.q, 1.0);
         if self.eta_max > 1.0 {
             (q_next, eta) = if self.qwait != 0 {
-                (self.q, self.eta_same_order(dsm))
+                (self.q, self.eta_same_order(dsm_sq))
             } else {
                 self.qwait = 2;
-                self.eta_and_order(dsm)
+                self.eta_and_order(dsm_sq)
             };
             if eta < ETA_THRESHOLD {
                 eta = 1.0;
@@ -1169,7 +1176,7 @@ impl<const N: usize> Bdf<N> {
             // instead the stable order whose own error estimate allows the largest step, if
             // one keeps the resolved modes accurate. If none does, the mode is left to the
             // error test, which sees its growth and shortens the step.
-            if let Some(choice) = self.best_stable_order(q_next, dsm) {
+            if let Some(choice) = self.best_stable_order(q_next, dsm_sq.sqrt()) {
                 self.stats.order_caps += 1;
                 (q_next, eta) = choice;
             }
@@ -1182,11 +1189,13 @@ impl<const N: usize> Bdf<N> {
     /// Only a growth by ETA_THRESHOLD or more changes the step. Below
     /// (BIAS_SAME·dsm > (1/ETA_THRESHOLD − ADDON)^(q+1)) the ratio need not be computed:
     /// this saves a powf in most steps.
-    fn eta_same_order(&self, dsm: f64) -> f64 {
+    fn eta_same_order(&self, dsm_sq: f64) -> f64 {
         let q = self.q;
-        if !grows((BIAS_SAME * dsm, q + 1)) {
-            1.0
-        } else if self.capped(BIAS_SAME * dsm, q + 1) {
+        if !grows_sq((BIAS_SAME * BIAS_SAME * dsm_sq, q + 1)) {
+            return 1.0;
+        }
+        let dsm = dsm_sq.sqrt();
+        if self.capped(BIAS_SAME * dsm, q + 1) {
             self.eta_max
         } else {
             step_ratio(BIAS_SAME, dsm, q + 1)
@@ -1209,27 +1218,32 @@ impl<const N: usize> Bdf<N> {
     /// The candidates (bias·err)^(1/k) are compared by integer powers ([`root_less`]), the
     /// smallest giving the largest η; the chosen one's ratio is exp(log(bias·err)/k), one
     /// logarithm and one exp, unless eta_max caps it anyway.
-    fn eta_and_order(&mut self, dsm: f64) -> (usize, f64) {
+    fn eta_and_order(&mut self, dsm_sq: f64) -> (usize, f64) {
         let q = self.q;
-        let same = (BIAS_SAME * dsm, q + 1);
-        let mut down = (f64::INFINITY, q);
+        // The candidates first as squares, (bias·err)²: no square root in the common case.
+        let same_sq = (BIAS_SAME * BIAS_SAME * dsm_sq, q + 1);
+        let mut down_sq = (f64::INFINITY, q);
         if q > 1 {
-            down.0 = BIAS_DOWN * (self.wrms(&self.zn[q]) * self.coeffs.tq[1]);
+            let tq1 = self.coeffs.tq[1];
+            down_sq.0 = BIAS_DOWN * BIAS_DOWN * (self.wrms_squared(&self.zn[q]) * (tq1 * tq1));
         }
         let qmax = self.cfg.max_order;
-        let mut up = (f64::INFINITY, q + 2);
+        let mut up_sq = (f64::INFINITY, q + 2);
         if q != qmax && self.saved_tq5 != 0.0 {
             let ratio = (self.coeffs.tq[5] / self.saved_tq5)
                 * math::powi(self.h / self.tau[2], q as i32 + 1);
             let diff = self.acor - self.zn[qmax] * ratio;
-            up.0 = BIAS_UP * (self.wrms(&diff) * self.coeffs.tq[3]);
+            let tq3 = self.coeffs.tq[3];
+            up_sq.0 = BIAS_UP * BIAS_UP * (self.wrms_squared(&diff) * (tq3 * tq3));
         }
         // An order whose step ratio stays below the threshold is no candidate: if none
         // reaches it, the step and the order stay (choose_next), and the comparisons and the
         // root are not needed. This is the common case.
-        if !(grows(same) || grows(down) || grows(up)) {
+        if !(grows_sq(same_sq) || grows_sq(down_sq) || grows_sq(up_sq)) {
             return (q, 1.0);
         }
+        let unsquare = |(x, k): (f64, usize)| (x.sqrt(), k);
+        let (same, down, up) = (unsquare(same_sq), unsquare(down_sq), unsquare(up_sq));
         let (mut best, mut q_next) = (same, q);
         if root_less(down, best) && !root_less(up, down) {
             best = down;
@@ -1385,7 +1399,13 @@ mod tests {
         for (k, bound) in GROWTH_BOUNDS.iter().enumerate().skip(1) {
             assert_eq!(*bound, math::powi(1.0 / ETA_THRESHOLD - ADDON, k as i32));
             for x in [0.0, 1e-9, 0.01, 0.1, 0.2, 0.3, 0.5, 0.6666, 0.7, 1.0, 10.0, f64::INFINITY] {
-                assert_eq!(grows((x, k)), ratio_at_least(x, k, ETA_THRESHOLD), "x={x} k={k}");
+                let want = ratio_at_least(x, k, ETA_THRESHOLD);
+                assert_eq!(grows_sq((x * x, k)), want, "x={x} k={k}");
+            }
+            // Just either side of the bound, beyond round-off: the squares decide alike.
+            for (x, want) in [(bound * (1.0 - 1e-12), true), (bound * (1.0 + 1e-12), false)] {
+                assert_eq!(grows_sq((x * x, k)), want, "k={k}");
+                assert_eq!(ratio_at_least(x, k, ETA_THRESHOLD), want, "k={k}");
             }
         }
     }
