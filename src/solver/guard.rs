@@ -63,25 +63,37 @@ const MAX_MODES: usize = 8;
 /// not help them and they are ignored.
 const MAX_ANGLE_DEG: f64 = 95.0;
 
-/// Squarings of J² in [`spectral_radius_bound`]: the bound is ‖J^(2^(k+1))‖∞^(1/2^(k+1)) after k.
+/// Squarings of J² in the refined bound ([`refined_radius_bound`]): ‖J^16‖∞^(1/16).
 const SQUARINGS: usize = 3;
 
-/// An upper bound ρ̄ ≥ ρ(J) = max |λ|, at the cost of 1 + [`SQUARINGS`] products of N×N
-/// matrices: ρ(J) = ρ(J^m)^(1/m) ≤ ‖J^m‖^(1/m) for any induced norm, and the bound falls
-/// towards ρ(J) as m grows (Gelfand's formula). For a mechanical system J ≈ [[0, I], [A, B]],
-/// so J² ≈ diag(A, A) with ρ(A) = ω_max²: ‖J²‖∞^½ over-estimates ω_max by the row sums of
-/// A, whose entries mix the scales of the coordinates: by 1.14–3.0×, 1.5× on average, over
-/// the Jacobians of the paper's scene at rtol 1e-6, enough to make the steps at rtol 1e-5
-/// compute the modes at 27 of 34 Jacobians though h·ω_max stays below BDF3's band. With
-/// m = 16 the bound is 1.02–1.27× ρ (1.11× on average; the DAE's alike), and 3 of the 34
-/// need the modes. The bound exceeds ρ by about κ^(1/m), κ the condition of the
-/// eigenvectors, so the squarings matter where the modes' shapes are far from orthogonal. Each power is scaled to norm 1 before it
-/// is squared, so nothing overflows: with s_1 = ‖J²‖ and s_k = ‖(M_(k−1)/s_(k−1))²‖ ≤ 1,
-/// ρ(J)² ≤ s_1·(s_2·(s_3·s_4^½)^½)^½. Infinite if J is not finite.
-fn spectral_radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>) -> f64 {
-    let norm = |m: &SMatrix<f64, N, N>| {
-        m.row_iter().map(|row| row.iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max)
-    };
+/// The ∞-norm (largest row sum of moduli) of a square matrix.
+fn norm_inf<const N: usize>(m: &SMatrix<f64, N, N>) -> f64 {
+    m.row_iter().map(|row| row.iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max)
+}
+
+/// The first bound on the spectral radius, ρ(J) ≤ ‖J²‖∞^½ (ρ(J)² = ρ(J²), which no
+/// induced norm is below); for a mechanical system the square matters: ‖J‖ grows with ω²,
+/// ‖J²‖^½ with ω. Infinite if an entry is; a NaN entry drops out of the maximum (the modes
+/// of such a J, when a step asks for them, are none: [`eigenvalues`] refuses it).
+fn radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>) -> f64 {
+    norm_inf(&(jac * jac)).sqrt()
+}
+
+/// A tighter upper bound ρ̄ ≥ ρ(J) = max |λ|, from `squarings` more products after J²:
+/// ρ(J) = ρ(J^m)^(1/m) ≤ ‖J^m‖^(1/m) for any induced norm, m = 2^(squarings+1), and the
+/// bound falls towards ρ(J) as m grows (Gelfand's formula). For a mechanical system
+/// J ≈ [[0, I], [A, B]], so J² ≈ diag(A, A) with ρ(A) = ω_max²: ‖J²‖∞^½
+/// ([`radius_bound`]) over-estimates ω_max by the row sums of A, whose entries mix the
+/// scales of the coordinates: by 1.14–3.0×, 1.5× on average, over the Jacobians of the
+/// paper's scene at rtol 1e-6. With m = 16 ([`SQUARINGS`]) the bound is 1.02–1.27× ρ (1.11×
+/// on average; the DAE's alike). It exceeds ρ by about κ^(1/m), κ the condition of the
+/// eigenvectors, so the squarings matter where the modes' shapes are far from orthogonal.
+/// Each power is scaled to norm 1 before it is squared, so nothing overflows: with
+/// s_1 = ‖J²‖ and s_k = ‖(M_(k−1)/s_(k−1))²‖ ≤ 1, ρ(J)² ≤ s_1·(s_2·(…·s_k^½)…)^½; with
+/// no squaring it is [`radius_bound`]. Infinite if J is not finite.
+// Out of line: it runs only when a step reaches the first bound's band.
+#[inline(never)]
+fn refined_radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>, squarings: usize) -> f64 {
     if !jac.iter().all(|x| x.is_finite()) {
         return f64::INFINITY;
     }
@@ -89,9 +101,9 @@ fn spectral_radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>) -> f64 {
     let mut scales = [1.0; SQUARINGS + 1];
     let mut used = 0;
     for scale in scales.iter_mut() {
-        *scale = norm(&m);
+        *scale = norm_inf(&m);
         used += 1;
-        if used > SQUARINGS || *scale == 0.0 || !scale.is_finite() {
+        if used > squarings || *scale == 0.0 || !scale.is_finite() {
             break;
         }
         m /= *scale;
@@ -125,6 +137,8 @@ pub(crate) struct StabilityGuard {
     /// bounds from its spectral radius bound, and [`max_safe_order`](Self::max_safe_order)
     /// computes them when a step reaches one.
     pending: bool,
+    /// Whether `unsafe_from`, while the modes are pending, holds the refined bound.
+    refined: bool,
 }
 
 impl Default for StabilityGuard {
@@ -134,6 +148,7 @@ impl Default for StabilityGuard {
             count: 0,
             unsafe_from: [f64::INFINITY; 6],
             pending: false,
+            refined: false,
         }
     }
 }
@@ -141,18 +156,28 @@ impl Default for StabilityGuard {
 impl StabilityGuard {
     /// Takes a new Jacobian `jac` (at Jacobian evaluations only, not every step). Its modes
     /// are computed only when a step could reach the unstable band of one of them: every
-    /// eigenvalue has |λ| ≤ ρ̄ ([`spectral_radius_bound`]), so a step with h·ρ̄ below BDF3's
-    /// lower band edge needs none. The decisions are those of the modes computed at once.
+    /// eigenvalue has |λ| ≤ ρ̄, so a step with h·ρ̄ below BDF3's
+    /// lower band edge needs none. ρ̄ is first ‖J²‖∞^½ ([`radius_bound`]); a step that reaches
+    /// its band refines it to ‖J^16‖∞^(1/16) ([`refined_radius_bound`]), and only a step that reaches that one's
+    /// computes the modes. On the paper's scene at rtol 1e-5 the first bound sent 27 of 34
+    /// Jacobians to the eigenvalues, though no step reached BDF3's band; the refined one sends
+    /// 3. The decisions are those of the modes computed at once.
     pub(crate) fn update<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
-        let bound = spectral_radius_bound(jac);
         self.count = 0;
         self.pending = true;
-        for (q, from) in self.unsafe_from.iter_mut().enumerate() {
-            *from = unstable_band(q).map_or(f64::INFINITY, |(lo, _)| lo / bound);
-        }
+        self.refined = false;
+        let bound = radius_bound(jac);
+        self.bound_by(bound);
         // A Jacobian that is not finite has no modes to find: the guard allows any order.
         if !bound.is_finite() {
             self.resolve(jac);
+        }
+    }
+
+    /// `unsafe_from` from a bound on the eigenvalues' moduli, while the modes are pending.
+    fn bound_by(&mut self, bound: f64) {
+        for (q, from) in self.unsafe_from.iter_mut().enumerate() {
+            *from = unstable_band(q).map_or(f64::INFINITY, |(lo, _)| lo / bound);
         }
     }
 
@@ -242,7 +267,13 @@ impl StabilityGuard {
         jac: &SMatrix<f64, N, N>,
     ) -> usize {
         if self.pending && q >= 3 && h.abs() >= self.unsafe_from[3] {
-            self.resolve(jac);
+            if !self.refined {
+                self.refined = true;
+                self.bound_by(refined_radius_bound(jac, SQUARINGS));
+            }
+            if h.abs() >= self.unsafe_from[3] {
+                self.resolve(jac);
+            }
         }
         let mut k = q;
         while k >= 3 && h.abs() >= self.unsafe_from[k] && !self.safe(k, h) {
@@ -402,8 +433,14 @@ mod tests {
         for case in 0..300 {
             let scale = math::powi(10.0, case % 7 - 3);
             let m = Matrix4::from_fn(|_, _| next() * scale);
-            let (rho, bound) = (radius(&m), spectral_radius_bound(&m));
-            assert!(bound >= rho * (1.0 - 1e-12), "case {case}: {bound} < {rho}");
+            let rho = radius(&m);
+            let mut last = f64::INFINITY;
+            for k in 0..=SQUARINGS {
+                let bound = refined_radius_bound(&m, k);
+                assert!(bound >= rho * (1.0 - 1e-12), "case {case}, {k}: {bound} < {rho}");
+                assert!(bound <= last * (1.0 + 1e-12), "case {case}, {k}: {bound} > {last}");
+                last = bound;
+            }
         }
         // Two undamped modes of 5 and 30 rad/s coupled through a stiffness matrix of mixed
         // scales (coordinates in m and rad), as the paper's beam: J = [[0, I], [−M⁻¹K, 0]].
@@ -414,17 +451,27 @@ mod tests {
         let mut jac = Matrix4::zeros();
         jac.fixed_view_mut::<2, 2>(0, 2).fill_with_identity();
         jac.fixed_view_mut::<2, 2>(2, 0).copy_from(&a);
-        let (rho, bound) = (radius(&jac), spectral_radius_bound(&jac));
+        let (rho, bound) = (radius(&jac), refined_radius_bound(&jac, SQUARINGS));
         assert!((rho - w2).abs() < 1e-9 * w2);
-        let first = {
-            let sq = jac * jac;
-            sq.row_iter().map(|r| r.iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max).sqrt()
-        };
+        let first = radius_bound(&jac);
+        assert_eq!(first, refined_radius_bound(&jac, 0));
         assert!(first > 1.4 * rho, "‖J²‖^½ = {first} is not loose here");
         assert!(bound >= rho && bound < 1.1 * rho, "{bound} against {rho} ({first} unsquared)");
         // The zero matrix has no modes; a non-finite one gives a non-finite bound.
-        assert_eq!(spectral_radius_bound(&Matrix4::<f64>::zeros()), 0.0);
-        assert!(!spectral_radius_bound(&Matrix4::from_element(f64::NAN)).is_finite());
+        assert_eq!(refined_radius_bound(&Matrix4::<f64>::zeros(), SQUARINGS), 0.0);
+        assert!(!refined_radius_bound(&Matrix4::from_element(f64::NAN), 0).is_finite());
+
+        // The guard refines the bound before it computes the modes: a step with h·ρ = 0.2,
+        // below BDF3's band, but h·‖J²‖^½ above it, computes none.
+        let mut g = StabilityGuard::default();
+        g.update(&jac);
+        let h = 0.2 / rho;
+        assert!(h * first > 0.25);
+        assert_eq!(g.max_safe_order(5, h, &jac), 5);
+        assert!(g.pending && g.refined);
+        // h·ρ = 1: inside BDF4's and BDF5's bands, above BDF3's lower edge: the modes.
+        assert_eq!(g.max_safe_order(5, 1.0 / rho, &jac), 2);
+        assert!(!g.pending && g.count == 2);
     }
 
     #[test]
