@@ -137,7 +137,8 @@ pub(crate) struct StabilityGuard {
     /// bounds from its spectral radius bound, and [`max_safe_order`](Self::max_safe_order)
     /// computes them when a step reaches one.
     pending: bool,
-    /// Whether `unsafe_from`, while the modes are pending, holds the refined bound.
+    /// Whether `unsafe_from`, while the modes are pending, holds the refined bound (false
+    /// when they are not: derived, not state).
     refined: bool,
 }
 
@@ -196,6 +197,7 @@ impl StabilityGuard {
             return;
         }
         self.pending = false;
+        self.refined = false;
         self.count = 0;
         let Some(eigenvalues) = eigenvalues(jac) else {
             self.derive_bounds();
@@ -254,6 +256,7 @@ impl StabilityGuard {
     pub(crate) fn clear(&mut self) {
         self.count = 0;
         self.pending = false;
+        self.refined = false;
         self.derive_bounds();
     }
 
