@@ -234,7 +234,7 @@ impl BeamBody {
     /// Accelerations (v̈1, ϑ̈1, ü2) of the DAE. NaN if A is singular.
     pub fn dae_accel(&self, phi: &Phi, x: Vector3<f64>, xd: Vector3<f64>) -> Vector3<f64> {
         let (a, b) = self.dae(phi, x, xd);
-        solve3(a, b).unwrap_or(Vector3::repeat(f64::NAN))
+        solve_constrained(a, b).unwrap_or(Vector3::repeat(f64::NAN))
     }
 
     /// The hinge reactions from the body equations (19), given the body's motion: the
@@ -371,46 +371,28 @@ fn static_equilibrium(force: impl Fn(Vector2<f64>) -> Vector2<f64>) -> (Vector2<
     (q, false)
 }
 
-/// x with A x = b by Gaussian elimination with partial pivoting, written out for 3×3 (the
-/// DAE right-hand side solves one per evaluation; nalgebra's generic LU costs several times
-/// as much). `None` if a pivot is zero or not finite.
-#[allow(clippy::needless_range_loop)]
-fn solve3(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
-    let mut m = [
-        [a[(0, 0)], a[(0, 1)], a[(0, 2)], b[0]],
-        [a[(1, 0)], a[(1, 1)], a[(1, 2)], b[1]],
-        [a[(2, 0)], a[(2, 1)], a[(2, 2)], b[2]],
-    ];
-    // The reciprocals of the pivots: the back substitution multiplies by them instead of
-    // dividing, so that its three steps do not each wait for a division.
-    // Index loops with constant bounds: they unroll (iterator adaptors over the rows did
-    // not, at a few hundred instructions a solve).
-    let mut inv = [0.0; 3];
-    for k in 0..3 {
-        let mut p = k;
-        for i in k + 1..3 {
-            if m[i][k].abs() > m[p][k].abs() {
-                p = i;
-            }
-        }
-        m.swap(k, p);
-        let pivot = m[k][k];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return None;
-        }
-        inv[k] = 1.0 / pivot;
-        let row_k = m[k];
-        for i in k + 1..3 {
-            let f = m[i][k] * inv[k];
-            for j in k..4 {
-                m[i][j] -= f * row_k[j];
-            }
-        }
+/// x with A x = b for the DAE's A, whose last row is the constraint's, (c0, c1, 1): the
+/// unit coefficient of ü2 is the pivot that eliminates ü2 from the first two rows, which
+/// leaves the 2×2 Schur complement, the mass matrix of the reduced equations (15), symmetric
+/// and positive definite for the physical parameters; it is solved by Cramer's rule with one
+/// division, and ü2 follows from the last row. A 3×3 elimination with partial pivoting
+/// (three pivots, three reciprocals on the chain) cost twice the instructions. `None` if
+/// the complement is singular or not finite.
+fn solve_constrained(a: Matrix3<f64>, b: Vector3<f64>) -> Option<Vector3<f64>> {
+    debug_assert_eq!(a[(2, 2)], 1.0);
+    let (c0, c1) = (a[(2, 0)], a[(2, 1)]);
+    let (e0, e1) = (a[(0, 2)], a[(1, 2)]);
+    let (m00, m01) = (a[(0, 0)] - e0 * c0, a[(0, 1)] - e0 * c1);
+    let (m10, m11) = (a[(1, 0)] - e1 * c0, a[(1, 1)] - e1 * c1);
+    let (f0, f1) = (b[0] - e0 * b[2], b[1] - e1 * b[2]);
+    let det = m00 * m11 - m01 * m10;
+    if det == 0.0 || !det.is_finite() {
+        return None;
     }
-    let x2 = m[2][3] * inv[2];
-    let x1 = (m[1][3] - m[1][2] * x2) * inv[1];
-    let x0 = (m[0][3] - m[0][1] * x1 - m[0][2] * x2) * inv[0];
-    Some(Vector3::new(x0, x1, x2))
+    let inv_det = 1.0 / det;
+    let x0 = (m11 * f0 - m01 * f1) * inv_det;
+    let x1 = (m00 * f1 - m10 * f0) * inv_det;
+    Some(Vector3::new(x0, x1, b[2] - c0 * x0 - c1 * x1))
 }
 
 #[cfg(test)]
@@ -419,20 +401,26 @@ mod tests {
     use crate::model::kinematics::u1;
 
     #[test]
-    fn solve3_matches_nalgebra_lu() {
-        // A saddle-point matrix as the DAE's (zero in the corner, so pivoting is needed),
-        // a scaled one, and a singular one.
-        let saddle = Matrix3::new(2.0, 0.3, 0.7, 0.3, 1.5, -2.5, 0.7, -2.5, 0.0);
-        let scaled = Matrix3::new(1e-8, 1.0, 0.0, 1.0, 1e-8, 3.0, 0.0, 3.0, 1e6);
+    fn constrained_solve_matches_nalgebra_lu() {
+        // The DAE's shape (last row (c0, c1, 1)): a saddle-like one, one with a tiny
+        // constraint row, the model's own, and a singular one.
+        let saddle = Matrix3::new(2.0, 0.3, 0.7, 0.3, 1.5, -2.5, 0.7, -2.5, 1.0);
+        let tiny = Matrix3::new(30.0, 4.0, -1e-3, 4.0, 2.0, -5.0, 1e-4, 0.2, 1.0);
+        let x = Vector3::new(-0.1, 0.05, 0.001);
+        let xd = Vector3::new(0.3, -0.2, 0.01);
+        let (own, _) = model().dae(&phi(), x, xd);
         let b = Vector3::new(1.0, -2.0, 0.5);
-        for a in [saddle, scaled, Matrix3::new(0.0, 1.0, 2.0, 1.0, 0.0, 0.0, 2.0, 0.0, 1.0)] {
-            let (ours, lu) = (solve3(a, b).unwrap(), a.lu().solve(&b).unwrap());
+        for a in [saddle, tiny, own] {
+            let (ours, lu) = (solve_constrained(a, b).unwrap(), a.lu().solve(&b).unwrap());
             assert!((ours - lu).norm() <= 1e-13 * lu.norm(), "{ours} vs {lu}");
             assert!((a * ours - b).norm() <= 1e-12 * b.norm());
         }
-        let singular = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 1.0, 1.0);
-        assert!(solve3(singular, b).is_none());
-        assert!(solve3(Matrix3::repeat(f64::NAN), b).is_none());
+        // Rows 1 and 2 dependent once ü2 is eliminated.
+        let singular = Matrix3::new(1.0, 2.0, 1.0, 2.0, 4.0, 2.0, 0.0, 0.0, 1.0);
+        assert!(solve_constrained(singular, b).is_none());
+        let mut nan = Matrix3::repeat(f64::NAN);
+        nan[(2, 2)] = 1.0;
+        assert!(solve_constrained(nan, b).is_none());
     }
 
     fn model() -> BeamBody {
