@@ -73,8 +73,8 @@ fn norm_inf<const N: usize>(m: &SMatrix<f64, N, N>) -> f64 {
 
 /// The first bound on the spectral radius, ρ(J) ≤ ‖J²‖∞^½ (ρ(J)² = ρ(J²), which no
 /// induced norm is below); for a mechanical system the square matters: ‖J‖ grows with ω²,
-/// ‖J²‖^½ with ω. Infinite if an entry is; a NaN entry drops out of the maximum (the modes
-/// of such a J, when a step asks for them, are none: [`eigenvalues`] refuses it).
+/// ‖J²‖^½ with ω. A J that is not finite may give any bound (a NaN row sum drops out of the
+/// maximum); its modes, when a step asks for them, are none: [`eigenvalues`] refuses it.
 fn radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>) -> f64 {
     norm_inf(&(jac * jac)).sqrt()
 }
@@ -109,12 +109,12 @@ fn refined_radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>, squarings: usi
         m /= *scale;
         m = m * m;
     }
-    // ρ(J)² ≤ s_1·(s_2·(…·s_k^½)…)^½, folded from the innermost.
-    let square = scales[..used]
-        .iter()
-        .rev()
-        .fold(None, |inner: Option<f64>, &s| Some(inner.map_or(s, |b| s * b.sqrt())));
-    square.unwrap_or(0.0).sqrt()
+    // ρ(J)² ≤ s_1·(s_2·(…·s_k^½)…)^½, folded from the innermost (the loop sets s_1 at least).
+    let mut square = scales[used - 1];
+    for s in scales[..used - 1].iter().rev() {
+        square = s * square.sqrt();
+    }
+    square.sqrt()
 }
 
 /// One weakly damped mode: |λ| and its angle from the negative real axis in degrees.
@@ -157,9 +157,9 @@ impl Default for StabilityGuard {
 impl StabilityGuard {
     /// Takes a new Jacobian `jac` (at Jacobian evaluations only, not every step). Its modes
     /// are computed only when a step could reach the unstable band of one of them: every
-    /// eigenvalue has |λ| ≤ ρ̄, so a step with h·ρ̄ below BDF3's
-    /// lower band edge needs none. ρ̄ is first ‖J²‖∞^½ ([`radius_bound`]); a step that reaches
-    /// its band refines it to ‖J^16‖∞^(1/16) ([`refined_radius_bound`]), and only a step that reaches that one's
+    /// eigenvalue has |λ| ≤ ρ̄, so a step with h·ρ̄ below BDF3's lower band edge needs none.
+    /// ρ̄ is first ‖J²‖∞^½ ([`radius_bound`]); a step that reaches its band refines it to
+    /// ‖J^16‖∞^(1/16) ([`refined_radius_bound`]), and only a step that reaches that one's
     /// computes the modes. On the paper's scene at rtol 1e-5 the first bound sent 27 of 34
     /// Jacobians to the eigenvalues, though no step reached BDF3's band; the refined one sends
     /// 3. The decisions are those of the modes computed at once.
