@@ -4,9 +4,10 @@
 //!
 //! - [`model`]: parameters, the four formulations, φ sources, hinge reactions. No I/O.
 //! - [`solver`]: our BDF integrator, generic over the system size. No I/O.
+//! - [`settings`]: the one table of settings; [`scene`]: a run's settings, checked together.
 //! - [`sim`]: the driver that runs a scene and samples it on an output grid.
 //! - [`math`]: sin, cos, exp, pow, ..., one implementation on every platform.
-//! - `study` (feature `study`, on by default): design studies, many runs of one scene over
+//! - `study` (feature `cli`, on by default): design studies, many runs of one scene over
 //!   parameter grids and Latin hypercube samples, with metrics per run.
 //!
 //! The FMI 2.0 layer (`fmi2`, the only `unsafe` code) sits on top of these.
@@ -14,10 +15,10 @@
 //! ```
 //! use beam_body::sim::{simulate, Scene};
 //!
-//! // The paper's parameters and turn, for the first second, in the dae-stabilized formulation.
+//! // The paper's parameters and turn, for the first second, in the dae_stabilized formulation.
 //! let mut scene = Scene::default();
-//! scene.set("t_end", "1.0").unwrap();
-//! scene.set("formulation", "dae-stabilized").unwrap();
+//! scene.set_text("t_end", "1.0").unwrap();
+//! scene.set_text("formulation", "dae_stabilized").unwrap();
 //! let mut rows = Vec::new();
 //! let stats = simulate(&scene, |o| rows.push(*o)).unwrap().stats;
 //! let last = rows.last().unwrap();
@@ -28,10 +29,15 @@
 
 #![deny(unsafe_code)]
 
+pub mod csv;
 pub mod fmi2;
+pub mod hash;
 pub mod math;
 pub mod model;
+pub mod range;
+pub mod scene;
+pub mod settings;
 pub mod sim;
 pub mod solver;
-#[cfg(feature = "study")]
+#[cfg(feature = "cli")]
 pub mod study;

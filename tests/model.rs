@@ -8,8 +8,8 @@ use std::f64::consts::PI;
 
 fn paper() -> Scene {
     let mut s = Scene::default();
-    s.set("t_end", "10.2").unwrap();
-    s.set("dt_out", "0.0085").unwrap();
+    s.set_text("t_end", "10.2").unwrap();
+    s.set_text("dt_out", "0.0085").unwrap();
     s
 }
 
@@ -21,7 +21,7 @@ fn run(scene: &Scene) -> (Vec<Outputs>, Stats) {
 
 fn with(mut scene: Scene, sets: &[(&str, &str)]) -> Scene {
     for (k, v) in sets {
-        scene.set(k, v).unwrap();
+        scene.set_text(k, v).unwrap();
     }
     scene
 }
@@ -48,7 +48,7 @@ fn energy_is_conserved_with_phi_locked() {
     // Scale: the energy of the oscillation, above the undeformed state at rest.
     let (rest, _) =
         run(&with(base.clone(), &[("v1_0", "0"), ("dtheta1_0", "0"), ("t_end", "0.01")]));
-    for form in ["reduced", "dae-stabilized", "linear"] {
+    for form in ["reduced", "dae_stabilized", "linear"] {
         let mut drifts = Vec::new();
         for rtol in ["1e-6", "1e-9"] {
             let scene = with(base.clone(), &[("formulation", form), ("rtol", rtol)]);
@@ -68,13 +68,13 @@ fn energy_is_conserved_with_phi_locked() {
     }
 }
 
-/// `reduced`, `dae` and `dae-stabilized` solve the same motion (paper §3: differentiating
+/// `reduced`, `dae` and `dae_stabilized` solve the same motion (paper §3: differentiating
 /// the constraint twice and substituting ü2 gives back eq. 15).
 #[test]
 fn reduced_and_dae_agree_on_the_paper_scene() {
     let scene = |form| with(paper(), &[("formulation", form), ("rtol", "1e-10")]);
     let (red, _) = run(&scene("reduced"));
-    for form in ["dae", "dae-stabilized"] {
+    for form in ["dae", "dae_stabilized"] {
         let (dae, _) = run(&scene(form));
         let dv = max_diff(&red, &dae, |o| o.v1);
         let dth = max_diff(&red, &dae, |o| o.theta1);
@@ -97,9 +97,9 @@ fn linear_agrees_with_reduced_to_second_order() {
     let diff = |phi_end: f64| {
         let base = with(Scene::default(), &[("t_end", "5"), ("rtol", "1e-11")]);
         let mut red = base.clone();
-        red.set("phi_end", &phi_end.to_string()).unwrap();
+        red.set_text("phi_end", &phi_end.to_string()).unwrap();
         let mut lin = red.clone();
-        lin.set("formulation", "linear").unwrap();
+        lin.set_text("formulation", "linear").unwrap();
         let (a, _) = run(&red);
         let (b, _) = run(&lin);
         let amp = a.iter().map(|o| o.v1.abs()).fold(0.0, f64::max);
@@ -123,7 +123,7 @@ fn dae_drift_is_reported_and_bounded() {
         rows.iter().map(|o| o.drift.abs()).fold(0.0, f64::max)
     };
     let (d6, d10) = (drift("dae", "1e-6"), drift("dae", "1e-10"));
-    let s6 = drift("dae-stabilized", "1e-6");
+    let s6 = drift("dae_stabilized", "1e-6");
     eprintln!("dae drift: {d6:.2e} m at rtol 1e-6, {d10:.2e} m at 1e-10; stabilized {s6:.2e} m");
     assert!(d6 > 0.0 && d6 < 2e-3, "drift {d6}");
     assert!(d10 < 5e-7, "drift {d10}");
@@ -147,7 +147,7 @@ fn dae_drift_beyond_a_tenth_of_the_length_stops_the_run() {
     assert!(err.contains("outside the model's range of validity"), "{err}");
     let last = last.expect("some outputs before the stop");
     assert!(last.drift.abs() <= 0.25 && last.t < 10.2, "t = {}, drift {}", last.t, last.drift);
-    let (rows, _) = run(&scene("dae-stabilized"));
+    let (rows, _) = run(&scene("dae_stabilized"));
     assert_eq!(rows.len(), 1201);
 }
 
@@ -196,7 +196,7 @@ fn every_formulation_runs_and_reports_finite_values() {
 fn divergence_above_buckling_stops_with_a_clear_message() {
     let g_cr = BeamBody::buckling_g(paper().params);
     assert!(g_cr < 0.0, "{g_cr}");
-    for formulation in ["reduced", "dae", "dae-stabilized"] {
+    for formulation in ["reduced", "dae", "dae_stabilized"] {
         let scene = |ratio: f64| {
             with(
                 paper(),

@@ -3,35 +3,16 @@
 //! state machine ([`instance`](super::instance)) knows the model only through this file.
 #![forbid(unsafe_code)]
 
-use super::variables::{Type, Var, Variable, VARIABLES};
-use crate::model::{
-    Formulation, Interpolation, Kinematics, PaperLaw, Params, RangeCheck, Reactions,
-};
-use crate::solver::{BdfConfig, FixedStep};
+use super::variables::{Var, Variable};
+use crate::model::{Kinematics, Reactions};
+use crate::scene::Scene;
+use crate::settings::{self, Kind, Setting};
 use std::fmt;
 
-/// Where φ comes from (the `phi_source` enumeration).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PhiSource {
-    Input,
-    Law,
-}
-
-/// The values of the parameters and the input.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The values of the parameters (the settings of a run, as the CLI has them) and the input.
+#[derive(Clone, Debug, PartialEq)]
 pub(super) struct Values {
-    pub params: Params,
-    pub law: PaperLaw,
-    pub atol: f64,
-    pub fixed_step: f64,
-    pub formulation: Formulation,
-    pub phi_source: PhiSource,
-    pub max_order: i32,
-    pub fixed_order: i32,
-    pub phi_extrapolation: i32,
-    pub phi_interpolation: Interpolation,
-    pub range_check: RangeCheck,
-    pub stability_guard: bool,
+    pub settings: Scene,
     pub phi: f64,
 }
 
@@ -54,36 +35,46 @@ impl fmt::Debug for Value {
     }
 }
 
-impl Values {
-    /// The start values of the variable table.
-    pub(super) fn from_table() -> Values {
-        let mut v = Values {
-            params: Params::default(),
-            law: PaperLaw::default(),
-            atol: 0.0,
-            fixed_step: 0.0,
-            formulation: Formulation::Reduced,
-            phi_source: PhiSource::Input,
-            max_order: 5,
-            fixed_order: 2,
-            phi_extrapolation: 3,
-            phi_interpolation: Interpolation::Smooth,
-            range_check: RangeCheck::Stop,
-            stability_guard: true,
-            phi: 0.0,
-        };
-        for var in VARIABLES {
-            let start = match var.ty {
-                Type::Real { start: Some(s), .. } => Value::Real(s),
-                Type::Real { start: None, .. } => continue,
-                Type::Integer { start, .. } | Type::Enumeration { start, .. } => {
-                    Value::Integer(start)
-                }
-                Type::Boolean { start } => Value::Boolean(start),
-            };
-            v.set(var, start).expect("the table's start values are in range");
+/// A setting's value as FMI has it: enumerations are 1-based.
+fn to_fmi(value: settings::Value) -> Value {
+    match value {
+        settings::Value::Real(x) => Value::Real(x),
+        settings::Value::Integer(k) => Value::Integer(k as i32),
+        settings::Value::Choice(k) => Value::Integer(k as i32 + 1),
+        settings::Value::Bool(b) => Value::Boolean(b),
+    }
+}
+
+/// An FMI value as the setting's value; the base type is checked before.
+fn from_fmi(setting: &Setting, value: Value) -> Result<settings::Value, String> {
+    Ok(match (setting.kind, value) {
+        (Kind::Choice(ty), Value::Integer(k)) => {
+            let n = ty.items.len() as i32;
+            if !(1..=n).contains(&k) {
+                let items: Vec<String> = ty
+                    .items
+                    .iter()
+                    .enumerate()
+                    .map(|(j, i)| format!("{} ({})", j + 1, i.0))
+                    .collect();
+                return Err(format!(
+                    "`{}` = {k} is out of range: must be one of {}",
+                    setting.name,
+                    items.join(", ")
+                ));
+            }
+            settings::Value::Choice((k - 1) as usize)
         }
-        v
+        (_, Value::Integer(k)) => settings::Value::Integer(k as i64),
+        (_, Value::Real(x)) => settings::Value::Real(x),
+        (_, Value::Boolean(b)) => settings::Value::Bool(b),
+    })
+}
+
+impl Values {
+    /// The start values: the settings table's defaults, and φ = 0.
+    pub(super) fn from_table() -> Values {
+        Values { settings: Scene::default(), phi: 0.0 }
     }
 
     /// Sets the input `phi`, which must be finite.
@@ -98,123 +89,22 @@ impl Values {
     /// Sets `var` after checking the value's range; the error names the variable and the
     /// allowed range.
     pub(super) fn set(&mut self, var: &Variable, value: Value) -> Result<(), String> {
-        let bad = |allowed: &str, shown: String| {
-            Err(format!("`{}` = {shown} is out of range: must be {allowed}", var.name))
-        };
-        match value {
-            Value::Real(x) => {
-                // Non-finite values are refused with the variable's whole range, not just
-                // "finite": `EI` = NaN says "positive and finite".
-                let finite = x.is_finite();
-                match var.var {
-                    Var::L | Var::Ei | Var::M | Var::M2 | Var::JC | Var::R | Var::G => {
-                        self.params.set(var.name, x).map_err(|e| e.to_string())?;
-                    }
-                    Var::TRot if finite && x > 0.0 => self.law.t_rot = x,
-                    Var::TRot => return bad("positive and finite", format!("{x:?}")),
-                    Var::Atol if finite && x >= 0.0 => self.atol = x,
-                    Var::FixedStep if finite && x >= 0.0 => self.fixed_step = x,
-                    Var::Atol | Var::FixedStep => {
-                        return bad("non-negative and finite", format!("{x:?}"))
-                    }
-                    Var::PhiEnd if !finite => return bad("finite", format!("{x:?}")),
-                    Var::PhiEnd => self.law.phi_end = x,
-                    Var::Phi => self.set_phi(x)?,
-                    _ => unreachable!("outputs are rejected before, other types by type"),
-                }
+        match (var.setting, value) {
+            (Some(key), _) => {
+                let value = from_fmi(Setting::of(key), value)?;
+                self.settings.set(key, value)
             }
-            Value::Integer(k) => {
-                let (lo, hi) = match var.ty {
-                    Type::Integer { min, max, .. } => (min, max),
-                    Type::Enumeration { ty, .. } => (1, ty.items.len() as i32),
-                    _ => unreachable!("checked by type"),
-                };
-                if !(lo..=hi).contains(&k) {
-                    let allowed = match var.ty {
-                        Type::Enumeration { ty, .. } => {
-                            let items: Vec<String> = (lo..=hi)
-                                .map(|j| format!("{j} ({})", ty.items[(j - 1) as usize].0))
-                                .collect();
-                            format!("one of {}", items.join(", "))
-                        }
-                        _ => format!("an integer in {lo}..={hi}"),
-                    };
-                    return bad(&allowed, k.to_string());
-                }
-                match var.var {
-                    Var::Formulation => self.formulation = Formulation::ALL[(k - 1) as usize],
-                    Var::PhiSource => {
-                        self.phi_source = if k == 1 { PhiSource::Input } else { PhiSource::Law }
-                    }
-                    Var::MaxOrder => self.max_order = k,
-                    Var::FixedOrder => self.fixed_order = k,
-                    Var::PhiExtrapolation => self.phi_extrapolation = k,
-                    Var::PhiInterpolation => {
-                        self.phi_interpolation = Interpolation::ALL[(k - 1) as usize]
-                    }
-                    Var::RangeCheck => self.range_check = RangeCheck::ALL[(k - 1) as usize],
-                    _ => unreachable!("checked by type"),
-                }
-            }
-            Value::Boolean(b) => match var.var {
-                Var::StabilityGuard => self.stability_guard = b,
-                _ => unreachable!("checked by type"),
-            },
+            (None, Value::Real(x)) if var.var == Var::Phi => self.set_phi(x),
+            _ => unreachable!("outputs are rejected before, other types by type"),
         }
-        Ok(())
     }
 
     /// The value of a parameter or the input.
-    pub(super) fn get(&self, var: Var) -> Option<Value> {
-        let p = &self.params;
-        Some(match var {
-            Var::L => Value::Real(p.l),
-            Var::Ei => Value::Real(p.ei),
-            Var::M => Value::Real(p.m),
-            Var::M2 => Value::Real(p.m2),
-            Var::JC => Value::Real(p.j_c),
-            Var::R => Value::Real(p.r),
-            Var::G => Value::Real(p.g),
-            Var::TRot => Value::Real(self.law.t_rot),
-            Var::PhiEnd => Value::Real(self.law.phi_end),
-            Var::Atol => Value::Real(self.atol),
-            Var::FixedStep => Value::Real(self.fixed_step),
-            Var::Phi => Value::Real(self.phi),
-            Var::Formulation => {
-                let k = Formulation::ALL.iter().position(|f| *f == self.formulation);
-                Value::Integer(k.expect("every formulation is listed") as i32 + 1)
-            }
-            Var::PhiSource => Value::Integer(match self.phi_source {
-                PhiSource::Input => 1,
-                PhiSource::Law => 2,
-            }),
-            Var::MaxOrder => Value::Integer(self.max_order),
-            Var::FixedOrder => Value::Integer(self.fixed_order),
-            Var::PhiExtrapolation => Value::Integer(self.phi_extrapolation),
-            Var::PhiInterpolation => {
-                let k = Interpolation::ALL.iter().position(|i| *i == self.phi_interpolation);
-                Value::Integer(k.expect("every interpolation is listed") as i32 + 1)
-            }
-            Var::RangeCheck => {
-                let k = RangeCheck::ALL.iter().position(|r| *r == self.range_check);
-                Value::Integer(k.expect("every range check is listed") as i32 + 1)
-            }
-            Var::StabilityGuard => Value::Boolean(self.stability_guard),
-            _ => return None,
-        })
-    }
-
-    /// The integrator settings, with the experiment's relative tolerance.
-    pub(super) fn solver_settings(&self, rtol: f64) -> BdfConfig {
-        BdfConfig {
-            rtol,
-            atol: (self.atol > 0.0).then_some(self.atol),
-            max_order: self.max_order as usize,
-            fixed_step: (self.fixed_step > 0.0)
-                .then_some(FixedStep { h: self.fixed_step, order: self.fixed_order as usize }),
-            stability_guard: self.stability_guard,
-            max_steps: MAX_STEPS_PER_DO_STEP,
-            ..BdfConfig::default()
+    pub(super) fn get(&self, var: &Variable) -> Option<Value> {
+        match var.setting {
+            Some(key) => Some(to_fmi(self.settings.get(key))),
+            None if var.var == Var::Phi => Some(Value::Real(self.phi)),
+            None => None,
         }
     }
 }

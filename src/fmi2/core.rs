@@ -3,9 +3,9 @@
 //! [`state`](super::state) writes and reads it, neither through the other.
 #![forbid(unsafe_code)]
 
-use super::binding::{PhiSource, Values};
-use crate::model::{BeamBody, HostSignal, Kinematics, Reactions, Sample};
-use crate::sim::{InitialState, Run};
+use super::binding::{Values, MAX_STEPS_PER_DO_STEP};
+use crate::model::{Kinematics, Reactions, Sample};
+use crate::sim::Run;
 
 /// The states of the FMI 2.0 co-simulation state machine (spec §4.2.4) that an instance can
 /// be in. `stepInProgress` and `stepCanceled` never occur: steps are synchronous.
@@ -122,24 +122,12 @@ impl Core {
         Sample { t, phi: self.values.phi, dphi: self.pending[0], ddphi: self.pending[1] }
     }
 
-    /// A fresh integrator at the start time, after checking every parameter together.
+    /// A fresh integrator at the start time, after checking every parameter together: the
+    /// CLI's [`Run::start`] on the FMU's settings, with the experiment's tolerance.
     pub(super) fn build_run(&self) -> Result<Run, String> {
-        let v = &self.values;
-        let model = BeamBody::new(v.params).map_err(|e| e.to_string())?;
+        let mut scene = self.values.settings.clone();
+        scene.solver.rtol = self.setup.rtol();
         let t0 = self.setup.start_time;
-        let options = v.solver_settings(self.setup.rtol());
-        let init = InitialState::default();
-        let mut run = match v.phi_source {
-            PhiSource::Law => Run::with_law(model, v.formulation, &options, t0, init, v.law),
-            PhiSource::Input => {
-                let signal = HostSignal::new(v.phi_interpolation, v.phi_extrapolation as usize);
-                Run::with_host(model, v.formulation, &options, t0, init, signal, self.sample(t0))
-            }
-        }
-        .map_err(|e| e.to_string())?;
-        run.set_range_check(v.range_check);
-        let phi0 = run.piece().eval(t0).phi;
-        run.model().check_start(phi0, 0.0, 0.0).map_err(|e| e.to_string())?;
-        Ok(run)
+        Run::start(&scene, t0, self.sample(t0), MAX_STEPS_PER_DO_STEP).map_err(|e| e.to_string())
     }
 }

@@ -14,6 +14,7 @@ use super::variables::{
     BaseType, Causality, Var, Variable, CAPABILITIES, LOG_CATEGORIES, VARIABLES,
 };
 use crate::model::{BeamBody, Kinematics};
+use crate::scene::PhiSource;
 use crate::solver::check_rtol;
 use std::fmt;
 
@@ -86,6 +87,8 @@ pub struct Instance {
     log: Logger,
     logging: LogFlags,
     core: Core,
+    /// Whether the host has been told, once, that its φ is ignored (`phi_source = law`).
+    told_phi_ignored: bool,
 }
 
 impl fmt::Debug for Instance {
@@ -180,6 +183,7 @@ impl Instance {
             log,
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
             core: Core::new(),
+            told_phi_ignored: false,
         };
         inst.trace(format_args!("fmi2Instantiate: instance `{name}`"));
         Some(inst)
@@ -195,11 +199,13 @@ impl Instance {
 
     // ----- logging and the edge -----------------------------------------------------------
 
-    /// Logs `msg`. Errors, discards and fatal errors always go out; other messages only
-    /// when their category is on.
+    /// Logs `msg`. Warnings, discards, errors and fatal errors always go out: a function that
+    /// returns one of them has called the logger (FMI 2.0.4, §2.1.3, the meaning of
+    /// fmi2Warning and of the statuses above it), and debug logging (`loggingOn`) concerns
+    /// the other messages, which go out only when their category is on.
     pub fn log(&mut self, status: Status, msg: &str) {
         let category = category_of(status);
-        let always = status >= Status::Discard;
+        let always = status >= Status::Warning;
         let k = LOG_CATEGORIES.iter().position(|(c, _)| *c == category).unwrap_or(0);
         if always || self.logging.0[k] {
             (self.log)(status, category, msg);
@@ -475,7 +481,7 @@ impl Instance {
     fn model(&self) -> Result<BeamBody, String> {
         match &self.core.run {
             Some(run) => Ok(*run.model()),
-            None => BeamBody::new(self.core.values.params).map_err(|e| e.to_string()),
+            None => BeamBody::new(self.core.values.settings.params).map_err(|e| e.to_string()),
         }
     }
 
@@ -509,7 +515,7 @@ impl Instance {
     /// The value of any variable of base type `base`.
     fn get_value(&mut self, func: &str, vr: u32, base: BaseType) -> FmiResult<Value> {
         let info = Self::lookup(func, vr, base)?;
-        if let Some(v) = self.core.values.get(info.var) {
+        if let Some(v) = self.core.values.get(info) {
             return Ok(v);
         }
         let (x, t) = self.output(func, info.var)?;
@@ -611,7 +617,7 @@ impl Instance {
             }
             // All or none: a copy takes the values, unless there is only one.
             let single = vrs.len() == 1;
-            let mut copy = if single { None } else { Some(self.core.values) };
+            let mut copy = if single { None } else { Some(self.core.values.clone()) };
             let state = self.core.state;
             for (vr, value) in vrs.iter().zip(values) {
                 let info = Self::lookup(func, *vr, base)?;
@@ -639,9 +645,34 @@ impl Instance {
             }
             self.core.cache = OutputCache::default();
             trace!(self, "{func}: {}", Listing(vrs, values));
+            if vrs.contains(&Var::Phi.vr()) {
+                return Ok(self.phi_used(func));
+            }
             Ok(Status::Ok)
         })();
         self.status(r)
+    }
+
+    /// After the host set φ: with `phi_source = law` the law drives the body and φ is not
+    /// used. A host that sends φ between steps is driving it, and is told so once, with
+    /// fmi2Warning (a host that sets every input's start value before the run is not).
+    fn phi_used(&mut self, func: &str) -> Status {
+        let law = self.core.values.settings.phi_source == PhiSource::Law;
+        if !law || self.core.state != State::StepComplete || self.told_phi_ignored {
+            return Status::Ok;
+        }
+        self.told_phi_ignored = true;
+        self.log(
+            Status::Warning,
+            &format!(
+                "{func}: the input `phi` is ignored: `phi_source` = law ({}), so the built-in \
+                 law turns the body; set `phi_source` = input ({}) before initialization to \
+                 drive phi (said once)",
+                PhiSource::Law as i32 + 1,
+                PhiSource::Input as i32 + 1
+            ),
+        );
+        Status::Warning
     }
 
     /// fmi2SetReal. The input `phi` alone, which a host sends at every communication point,
@@ -664,7 +695,7 @@ impl Instance {
         self.core.values.set_phi(x).map_err(|msg| FmiError::error(format!("{F}: {msg}")))?;
         self.core.cache = OutputCache::default();
         trace!(self, "{F}: {}", Listing(vrs, values));
-        Ok(Status::Ok)
+        Ok(self.phi_used(F))
     }
 
     /// fmi2SetInteger (integers and enumerations).
@@ -836,8 +867,8 @@ impl Instance {
             self.core.terminated = true;
             self.core.state = State::StepFailed;
             return Err(FmiError::discard(format!(
-                "{F}: integration failed: {e}. The FMU stopped at t = {t} \
-                 (fmi2LastSuccessfulTime), with fmi2Terminated = true"
+                "{F}: {e}. The FMU stopped at t = {t} (fmi2LastSuccessfulTime), with \
+                 fmi2Terminated = true"
             )));
         }
         self.core.time = target;

@@ -17,22 +17,19 @@
 //! history (`Bdf::check_state`). Malformed bytes give an error, never a panic.
 #![forbid(unsafe_code)]
 
-use super::binding::{PhiSource, Values};
+use super::binding::Values;
 use super::core::{Core, State};
-use super::variables::{guid, Causality, VARIABLES};
-use crate::model::{Formulation, Interpolation, RangeCheck};
+use super::variables::guid;
+use crate::settings::{Value, SETTINGS};
 use crate::solver::{check_rtol, StateVisitor};
 
 const MAGIC: &[u8; 8] = b"BBFMUST\0";
 /// Version of the byte format; bump it when [`visit_core`] changes.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 const GUID_LEN: usize = 38;
 const HEADER: usize = 8 + 4 + GUID_LEN + 8;
 
-/// FNV-1a, 64-bit (Fowler, Noll, Vo; offset basis and prime from the FNV reference).
-fn fnv1a_64(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3))
-}
+use crate::hash::fnv1a_64;
 
 /// Serializes a snapshot.
 pub(super) fn serialize(core: &Core) -> Vec<u8> {
@@ -170,65 +167,29 @@ pub(super) fn visit_core(core: &mut Core, v: &mut impl StateVisitor) -> Result<(
     Ok(())
 }
 
-/// Parameters and input; checked with the same rules as fmi2SetReal.
+/// The FMU's parameters, in the order of the settings table, and the input; checked with the
+/// same rules as fmi2Set*.
 fn visit_values(values: &mut Values, v: &mut impl StateVisitor) -> Result<(), String> {
-    let p = &mut values.params;
-    for (name, x) in [
-        ("l", &mut p.l),
-        ("EI", &mut p.ei),
-        ("m", &mut p.m),
-        ("M2", &mut p.m2),
-        ("J_C", &mut p.j_c),
-        ("r", &mut p.r),
-        ("g", &mut p.g),
-    ] {
-        v.real(name, x);
+    for setting in SETTINGS.iter().filter(|s| s.appears.fmu) {
+        let mut value = values.settings.get(setting.key);
+        match &mut value {
+            Value::Real(x) => v.real(setting.name, x),
+            Value::Integer(k) => {
+                let mut c = *k as u64;
+                v.count(setting.name, &mut c);
+                *k = i64::try_from(c).unwrap_or(-1);
+            }
+            Value::Choice(k) => {
+                let mut c = *k as u64;
+                v.count(setting.name, &mut c);
+                *k = usize::try_from(c).unwrap_or(usize::MAX);
+            }
+            Value::Bool(b) => v.flag(setting.name, b),
+        }
+        values.settings.set(setting.key, value).map_err(|e| format!("field {e}"))?;
     }
-    v.real("phi0", &mut values.law.phi0);
-    v.real("t_rot", &mut values.law.t_rot);
-    v.real("phi_end", &mut values.law.phi_end);
-    v.real("atol", &mut values.atol);
-    v.real("fixed_step", &mut values.fixed_step);
-    let mut f = Formulation::ALL.iter().position(|f| *f == values.formulation).unwrap_or(0) as u64;
-    v.count("formulation", &mut f);
-    values.formulation = *Formulation::ALL
-        .get(f as usize)
-        .ok_or_else(|| format!("field `formulation` = {f} is out of range"))?;
-    let mut src = values.phi_source as u64;
-    v.count("phi_source", &mut src);
-    values.phi_source = match src {
-        0 => PhiSource::Input,
-        1 => PhiSource::Law,
-        _ => return Err(format!("field `phi_source` = {src} is out of range")),
-    };
-    let mut range = values.range_check as u64;
-    v.count("range_check", &mut range);
-    values.range_check = *RangeCheck::ALL
-        .get(range as usize)
-        .ok_or_else(|| format!("field `range_check` = {range} is out of range"))?;
-    let mut interp = values.phi_interpolation as u64;
-    v.count("phi_interpolation", &mut interp);
-    values.phi_interpolation = *Interpolation::ALL
-        .get(interp as usize)
-        .ok_or_else(|| format!("field `phi_interpolation` = {interp} is out of range"))?;
-    for (name, k) in [
-        ("max_order", &mut values.max_order),
-        ("fixed_order", &mut values.fixed_order),
-        ("phi_extrapolation", &mut values.phi_extrapolation),
-    ] {
-        let mut c = *k as u64;
-        v.count(name, &mut c);
-        *k = i32::try_from(c).map_err(|_| format!("field `{name}` = {c} is out of range"))?;
-    }
-    v.flag("stability_guard", &mut values.stability_guard);
     v.real("phi", &mut values.phi);
-    // The same range checks as fmi2Set*.
-    let mut scratch = Values::from_table();
-    for var in VARIABLES.iter().filter(|var| var.causality != Causality::Output) {
-        let value = values.get(var.var).expect("parameters and the input have values");
-        scratch.set(var, value).map_err(|e| format!("field {e}"))?;
-    }
-    values.law.validate().map_err(|e| format!("field {e}"))
+    values.set_phi(values.phi).map_err(|e| format!("field {e}"))
 }
 
 fn check_head(core: &Core) -> Result<(), String> {

@@ -93,65 +93,11 @@ pub const UNITS: &[Unit] = &[
     unit("J", 1, 2, -2, 0),
 ];
 
-/// An `<EnumerationType>`; item `k` (0-based) has the value `k + 1`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EnumType {
-    pub name: &'static str,
-    pub description: &'static str,
-    /// (name, description), in order.
-    pub items: &'static [(&'static str, &'static str)],
-}
-
-pub const FORMULATION_TYPE: EnumType = EnumType {
-    name: "Formulation",
-    description: "Which equations of the paper are integrated",
-    items: &[
-        ("reduced", "eq. (15): hinge constraints exact, 2 DOF, u2 = u1(v1, theta1)"),
-        ("dae", "eq. (20)+(21): u2 integrated with the constraint differentiated twice; drifts"),
-        ("dae_stabilized", "eq. (20)+(21) projected onto u2 = u1, du2 = du1 after every step"),
-        ("linear", "eq. (16): linearised in v1, theta1; phi exact"),
-    ],
+pub use crate::settings::{
+    EnumType, ENUM_TYPES, FORMULATION_TYPE, PHI_INTERPOLATION_TYPE, PHI_SOURCE_TYPE,
+    RANGE_CHECK_TYPE,
 };
-
-pub const PHI_SOURCE_TYPE: EnumType = EnumType {
-    name: "PhiSource",
-    description: "Where the hinge angle phi(t) comes from",
-    items: &[
-        ("input", "the input phi, with its derivatives if the host sends them"),
-        ("law", "the paper's law phi_end*sin^2(pi*t/(2*t_rot)), then held"),
-    ],
-};
-
-pub const PHI_INTERPOLATION_TYPE: EnumType = EnumType {
-    name: "PhiInterpolation",
-    description: "How the input phi is interpolated between communication points",
-    items: &[
-        (
-            "smooth",
-            "pieces joined with continuous phi, phi' and phi'' to a target extrapolated from the \
-             last values and sent derivatives; jumps of the signal restart the integrator",
-        ),
-        (
-            "taylor",
-            "FMI's polynomial phi + phi'*s + phi''*s^2/2 from the sent derivatives over each step \
-             (with values only, a cubic to the extrapolated value and slope)",
-        ),
-    ],
-};
-
-pub const RANGE_CHECK_TYPE: EnumType = EnumType {
-    name: "RangeCheck",
-    description: "What a step does when the state leaves the range of validity of the equations \
-                  (|v1| <= l, |theta1| <= pi/2, the dae formulation's drift)",
-    items: &[
-        ("stop", "the step ends there with fmi2Discard and a message"),
-        ("warn", "fmi2Warning with a message, once; the run goes on"),
-        ("off", "the run goes on; a state that is not a number still ends the step"),
-    ],
-};
-
-pub const ENUM_TYPES: &[EnumType] =
-    &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE];
+use crate::settings::{Key, Kind, Setting, Value};
 
 /// `<LogCategories>`: (name, description). Errors are always logged; the others only when
 /// debug logging is on for them.
@@ -258,6 +204,11 @@ pub enum Var {
     PhiApplied,
     DphiApplied,
     DdphiApplied,
+    Phi0,
+    V10,
+    Theta10,
+    Dv10,
+    Dtheta10,
 }
 
 impl Var {
@@ -285,6 +236,8 @@ pub struct Variable {
     pub variability: Variability,
     pub ty: Type,
     pub description: &'static str,
+    /// The setting of a parameter ([`crate::settings`]), whose row gives the rest.
+    pub setting: Option<Key>,
 }
 
 impl Variable {
@@ -293,39 +246,33 @@ impl Variable {
     }
 }
 
-const fn real_param(
-    var: Var,
-    name: &'static str,
-    unit: &'static str,
-    start: f64,
-    min: Option<f64>,
-    description: &'static str,
-) -> Variable {
+/// The FMU parameter of a setting: its name, unit, range, start value and description are
+/// the table's. Enumerations are 1-based.
+const fn param(var: Var, key: Key) -> Variable {
+    let s = Setting::of(key);
+    let ty = match (s.kind, s.default) {
+        (Kind::Real { unit }, Value::Real(start)) => {
+            Type::Real { unit, start: Some(start), min: s.range.min(), max: s.range.max() }
+        }
+        (Kind::Integer, Value::Integer(start)) => {
+            let (min, max) = match s.range {
+                crate::range::Range::Integers(lo, hi) => (lo as i32, hi as i32),
+                _ => (i32::MIN, i32::MAX),
+            };
+            Type::Integer { start: start as i32, min, max }
+        }
+        (Kind::Choice(ty), Value::Choice(k)) => Type::Enumeration { ty, start: k as i32 + 1 },
+        (Kind::Bool, Value::Bool(start)) => Type::Boolean { start },
+        _ => panic!("a setting's default has its kind"),
+    };
     Variable {
         var,
-        name,
+        name: s.name,
         causality: Causality::Parameter,
         variability: Variability::Fixed,
-        ty: Type::Real { unit: Some(unit), start: Some(start), min, max: None },
-        description,
-    }
-}
-
-const fn int_param(
-    var: Var,
-    name: &'static str,
-    start: i32,
-    min: i32,
-    max: i32,
-    description: &'static str,
-) -> Variable {
-    Variable {
-        var,
-        name,
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Integer { start, min, max },
-        description,
+        ty,
+        description: s.description,
+        setting: Some(key),
     }
 }
 
@@ -342,132 +289,40 @@ const fn output(
         variability: Variability::Continuous,
         ty: Type::Real { unit: Some(unit), start: None, min: None, max: None },
         description,
+        setting: None,
     }
 }
 
 /// Every variable, in value-reference order (`VARIABLES[k].vr() == k`, checked by a test).
 /// Defaults are the paper's example (§4), as in [`crate::model::Params`].
 pub const VARIABLES: &[Variable] = &[
-    real_param(Var::L, "l", "m", 2.5, Some(0.0), "Beam length, > 0"),
-    real_param(Var::Ei, "EI", "N.m2", 1000.0, Some(0.0), "Bending stiffness, > 0"),
-    real_param(Var::M, "m", "kg/m", 2.0, Some(0.0), "Beam mass per unit length, >= 0"),
-    real_param(Var::M2, "M2", "kg", 12.0, Some(0.0), "Mass of the rigid body, > 0"),
-    real_param(
-        Var::JC,
-        "J_C",
-        "kg.m2",
-        1.0,
-        Some(0.0),
-        "Moment of inertia of the body about its centre of mass, >= 0",
-    ),
-    real_param(Var::R, "r", "m", 0.5, Some(0.0), "Hinge-to-centre-of-mass distance, >= 0"),
-    real_param(
-        Var::G,
-        "g",
-        "m/s2",
-        10.0,
-        None,
-        "Gravity along the undeformed beam axis (> 0 stretches the beam)",
-    ),
-    real_param(
-        Var::TRot,
-        "t_rot",
-        "s",
-        0.85,
-        Some(0.0),
-        "Duration of the turn of the built-in law (phi_source = law), > 0",
-    ),
-    real_param(
-        Var::PhiEnd,
-        "phi_end",
-        "rad",
-        std::f64::consts::PI,
-        None,
-        "Angle turned by the built-in law (phi_source = law)",
-    ),
-    Variable {
-        var: Var::Atol,
-        name: "atol",
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Real { unit: None, start: Some(0.0), min: Some(0.0), max: None },
-        description: "Absolute tolerance of the integrator for every state (in its SI unit); \
-                      0 selects 1e-3 * tolerance",
-    },
-    real_param(
-        Var::FixedStep,
-        "fixed_step",
-        "s",
-        0.0,
-        Some(0.0),
-        "Constant internal step of the paper's fixed-step BDF; 0 selects the adaptive BDF",
-    ),
-    Variable {
-        var: Var::Formulation,
-        name: "formulation",
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Enumeration { ty: &FORMULATION_TYPE, start: 1 },
-        description: "Equations integrated: reduced (15), dae (20-21), dae_stabilized, linear (16)",
-    },
-    Variable {
-        var: Var::PhiSource,
-        name: "phi_source",
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Enumeration { ty: &PHI_SOURCE_TYPE, start: 1 },
-        description: "Source of the hinge angle: the input phi, or the paper's law",
-    },
-    int_param(Var::MaxOrder, "max_order", 5, 1, 5, "Highest order of the adaptive BDF, 1..5"),
-    int_param(
-        Var::FixedOrder,
-        "fixed_order",
-        2,
-        1,
-        5,
-        "Order of the fixed-step BDF (used when fixed_step > 0), 1..5",
-    ),
-    int_param(
-        Var::PhiExtrapolation,
-        "phi_extrapolation",
-        3,
-        0,
-        3,
-        "Degree of the polynomial through the last input values that gives phi over a step \
-         when the host sends no derivatives, 0..3",
-    ),
-    Variable {
-        var: Var::PhiInterpolation,
-        name: "phi_interpolation",
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Enumeration { ty: &PHI_INTERPOLATION_TYPE, start: 1 },
-        description: "Interpolation of the input phi between communication points: smooth or \
-                      taylor",
-    },
-    Variable {
-        var: Var::RangeCheck,
-        name: "range_check",
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Enumeration { ty: &RANGE_CHECK_TYPE, start: 1 },
-        description: "Outside the range of validity (|theta1| <= pi/2, ...): stop, warn or off",
-    },
-    Variable {
-        var: Var::StabilityGuard,
-        name: "stability_guard",
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty: Type::Boolean { start: true },
-        description: "Cap the BDF order where an undamped mode would be amplified by BDF3-5",
-    },
+    param(Var::L, Key::L),
+    param(Var::Ei, Key::Ei),
+    param(Var::M, Key::M),
+    param(Var::M2, Key::M2),
+    param(Var::JC, Key::JC),
+    param(Var::R, Key::R),
+    param(Var::G, Key::G),
+    param(Var::TRot, Key::TRot),
+    param(Var::PhiEnd, Key::PhiEnd),
+    param(Var::Atol, Key::Atol),
+    param(Var::FixedStep, Key::FixedStep),
+    param(Var::Formulation, Key::Formulation),
+    param(Var::PhiSource, Key::PhiSource),
+    param(Var::MaxOrder, Key::MaxOrder),
+    param(Var::FixedOrder, Key::FixedOrder),
+    param(Var::PhiExtrapolation, Key::PhiExtrapolation),
+    param(Var::PhiInterpolation, Key::PhiInterpolation),
+    param(Var::RangeCheck, Key::RangeCheck),
+    param(Var::StabilityGuard, Key::StabilityGuard),
     Variable {
         var: Var::Phi,
         name: "phi",
         causality: Causality::Input,
         variability: Variability::Continuous,
         ty: Type::Real { unit: Some("rad"), start: Some(0.0), min: None, max: None },
-        description: "Hinge angle of the body (phi_source = input)",
+        description: "Hinge angle of the body (used with phi_source = input)",
+        setting: None,
     },
     output(Var::V1, "v1", "m", "Tip deflection"),
     output(Var::Theta1, "theta1", "rad", "Rotation of the beam's tip section"),
@@ -499,6 +354,12 @@ pub const VARIABLES: &[Variable] = &[
         "rad/s2",
         "Angular acceleration of the hinge the model used",
     ),
+    // Added after the outputs, so that the value references of FMUs before them still hold.
+    param(Var::Phi0, Key::Phi0),
+    param(Var::V10, Key::V10),
+    param(Var::Theta10, Key::Theta10),
+    param(Var::Dv10, Key::Dv10),
+    param(Var::Dtheta10, Key::Dtheta10),
 ];
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the
@@ -544,7 +405,6 @@ pub fn by_name(name: &str) -> Option<&'static Variable> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Params;
 
     #[test]
     fn value_references_are_the_row_index_and_names_unique() {
@@ -558,19 +418,18 @@ mod tests {
     }
 
     #[test]
-    fn parameter_defaults_are_the_models() {
-        let p = Params::default();
-        let start = |var: Var| match var.info().ty {
-            Type::Real { start: Some(s), .. } => s,
-            _ => panic!("{var:?} has no real start"),
-        };
-        for (name, value) in Params::NAMES.iter().zip([p.l, p.ei, p.m, p.m2, p.j_c, p.r, p.g]) {
-            let v = by_name(name).unwrap();
-            assert_eq!(start(v.var), value, "{name}");
+    fn the_parameters_are_the_settings_table_s() {
+        let fmu: Vec<Key> = VARIABLES.iter().filter_map(|v| v.setting).collect();
+        let table: Vec<Key> =
+            crate::settings::SETTINGS.iter().filter(|s| s.appears.fmu).map(|s| s.key).collect();
+        for key in &table {
+            assert_eq!(fmu.iter().filter(|k| *k == key).count(), 1, "{key:?}");
         }
-        let law = crate::model::PaperLaw::default();
-        assert_eq!(start(Var::TRot), law.t_rot);
-        assert_eq!(start(Var::PhiEnd), law.phi_end);
+        assert_eq!(fmu.len(), table.len());
+        for v in VARIABLES.iter().filter(|v| v.causality == Causality::Parameter) {
+            let s = Setting::of(v.setting.expect("a parameter has its setting"));
+            assert_eq!((v.name, v.description), (s.name, s.description));
+        }
     }
 
     #[test]

@@ -85,22 +85,23 @@ impl BeamBody {
         Ok(Self { params, mb, k, j2: j_c + m2 * r * r })
     }
 
-    /// Checks that the mass matrix of (15) is positive definite at the given start.
-    pub fn check_start(&self, phi: f64, v1: f64, theta1: f64) -> Result<(), ParamError> {
+    /// Checks that the mass matrix of (15) is positive definite at the given start; the
+    /// error says why not in the parameters' words.
+    pub fn check_start(&self, phi: f64, v1: f64, theta1: f64) -> Result<(), String> {
         let at = Phi { phi, ..Phi::default() };
         let (m, _) = self.reduced(&at, Vector2::new(v1, theta1), Vector2::zeros());
         let scale = m[(0, 0)] * m[(1, 1)];
         if m[(0, 0)] > 0.0 && m.determinant() > 1e-12 * scale {
-            Ok(())
-        } else {
-            Err(ParamError {
-                name: "m, J_C, r".to_string(),
-                value: m.determinant(),
-                allowed: "such that the mass matrix is positive definite at the start \
-                          (its determinant is the value shown); a massless beam (m = 0) \
-                          needs J_C > 0 or a body offset r·sin(φ) ≠ 0",
-            })
+            return Ok(());
         }
+        let Params { m: mass, j_c, r, .. } = self.params;
+        Err(format!(
+            "the equations of motion are singular at the start (their mass matrix is not \
+             positive definite): the rotation theta1 of a massless beam (m = {mass:?}) has no \
+             inertia unless the body has some about the hinge (J_C = {j_c:?} > 0, or its \
+             centre of mass off the beam's axis: r*sin(phi) != 0 with r = {r:?}, phi = {phi:?} \
+             at the start)"
+        ))
     }
 
     /// ∂C/∂q: rows x, y; columns v1, ϑ1.

@@ -25,7 +25,7 @@ impl Formulation {
         match self {
             Formulation::Reduced => "reduced",
             Formulation::Dae => "dae",
-            Formulation::DaeStabilized => "dae-stabilized",
+            Formulation::DaeStabilized => "dae_stabilized",
             Formulation::Linear => "linear",
         }
     }
@@ -44,18 +44,9 @@ impl fmt::Display for Formulation {
 
 impl FromStr for Formulation {
     type Err = String;
-    /// Accepts the names of [`name`](Formulation::name), and `dae_stabilized` (the FMI
-    /// enumeration's spelling).
+    /// The names of [`name`](Formulation::name).
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "reduced" => Ok(Formulation::Reduced),
-            "dae" => Ok(Formulation::Dae),
-            "dae-stabilized" | "dae_stabilized" => Ok(Formulation::DaeStabilized),
-            "linear" => Ok(Formulation::Linear),
-            _ => Err(format!(
-                "unknown formulation `{s}`: must be one of reduced, dae, dae-stabilized, linear"
-            )),
-        }
+        by_name(&Formulation::ALL, Formulation::name, "formulation", s)
     }
 }
 

@@ -1,3 +1,4 @@
+use crate::range::Range;
 use std::fmt;
 
 /// Physical parameters (SI units). Defaults are the paper's example (§4).
@@ -29,10 +30,9 @@ impl Default for Params {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamError {
     /// The parameter's name as the user writes it (`EI`, `t_rot`, …).
-    pub name: String,
+    pub name: &'static str,
     pub value: f64,
-    /// The allowed range, in words.
-    pub allowed: &'static str,
+    pub allowed: Range,
 }
 
 impl fmt::Display for ParamError {
@@ -47,55 +47,26 @@ impl fmt::Display for ParamError {
 
 impl std::error::Error for ParamError {}
 
-pub(crate) const POSITIVE: &str = "positive and finite";
-pub(crate) const NON_NEGATIVE: &str = "non-negative and finite";
-pub(crate) const FINITE: &str = "finite";
-
-pub(crate) fn check(name: &str, value: f64, allowed: &'static str) -> Result<(), ParamError> {
-    let ok = match allowed {
-        POSITIVE => value.is_finite() && value > 0.0,
-        NON_NEGATIVE => value.is_finite() && value >= 0.0,
-        _ => value.is_finite(),
-    };
-    if ok {
+pub(crate) fn check(name: &'static str, value: f64, allowed: Range) -> Result<(), ParamError> {
+    if allowed.contains(value) {
         Ok(())
     } else {
-        Err(ParamError { name: name.to_string(), value, allowed })
+        Err(ParamError { name, value, allowed })
     }
 }
 
 impl Params {
-    /// The names accepted by [`set`](Self::set), in the paper's notation.
-    pub const NAMES: [&'static str; 7] = ["l", "EI", "m", "M2", "J_C", "r", "g"];
-
-    /// Sets the parameter called `name` (one of [`NAMES`](Self::NAMES)) after checking its
-    /// range. Returns `Ok(false)` for a name that is not a parameter.
-    pub fn set(&mut self, name: &str, value: f64) -> Result<bool, ParamError> {
-        let (slot, allowed) = match name {
-            "l" => (&mut self.l, POSITIVE),
-            "EI" => (&mut self.ei, POSITIVE),
-            "m" => (&mut self.m, NON_NEGATIVE),
-            "M2" => (&mut self.m2, POSITIVE),
-            "J_C" => (&mut self.j_c, NON_NEGATIVE),
-            "r" => (&mut self.r, NON_NEGATIVE),
-            "g" => (&mut self.g, FINITE),
-            _ => return Ok(false),
-        };
-        check(name, value, allowed)?;
-        *slot = value;
-        Ok(true)
-    }
-
-    /// Checks every range. The mass matrix, which depends on the state too, is checked by
-    /// [`BeamBody::new`](super::BeamBody::new).
+    /// Checks every range (the settings table checks them too, before; the model checks what
+    /// it is given). The mass matrix, which depends on the state too, is checked by
+    /// [`BeamBody::check_start`](super::BeamBody::check_start).
     pub fn validate(&self) -> Result<(), ParamError> {
-        check("l", self.l, POSITIVE)?;
-        check("EI", self.ei, POSITIVE)?;
-        check("m", self.m, NON_NEGATIVE)?;
-        check("M2", self.m2, POSITIVE)?;
-        check("J_C", self.j_c, NON_NEGATIVE)?;
-        check("r", self.r, NON_NEGATIVE)?;
-        check("g", self.g, FINITE)
+        check("l", self.l, Range::Positive)?;
+        check("EI", self.ei, Range::Positive)?;
+        check("m", self.m, Range::NonNegative)?;
+        check("M2", self.m2, Range::Positive)?;
+        check("J_C", self.j_c, Range::NonNegative)?;
+        check("r", self.r, Range::NonNegative)?;
+        check("g", self.g, Range::Finite)
     }
 }
 
@@ -104,18 +75,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn set_checks_range_and_names_the_parameter() {
-        let mut p = Params::default();
-        assert_eq!(p.set("EI", 2000.0), Ok(true));
-        assert_eq!(p.ei, 2000.0);
-        let e = p.set("EI", 0.0).unwrap_err();
-        assert_eq!(e.name, "EI");
+    fn validate_names_the_parameter_and_its_range() {
+        assert!(Params::default().validate().is_ok());
+        let e = Params { ei: 0.0, ..Params::default() }.validate().unwrap_err();
+        assert_eq!((e.name, e.allowed), ("EI", Range::Positive));
         assert!(e.to_string().contains("positive"), "{e}");
-        assert!(p.set("m", -1.0).is_err());
-        assert!(p.set("J_C", 0.0).is_ok());
-        assert!(p.set("l", f64::NAN).is_err());
-        assert!(p.set("g", -10.0).is_ok());
-        assert_eq!(p.set("nope", 1.0), Ok(false));
-        assert_eq!(p.ei, 2000.0, "a rejected value leaves the parameter unchanged");
+        assert!(Params { m: -1.0, ..Params::default() }.validate().is_err());
+        assert!(Params { j_c: 0.0, ..Params::default() }.validate().is_ok());
+        assert!(Params { l: f64::NAN, ..Params::default() }.validate().is_err());
+        assert!(Params { g: -10.0, ..Params::default() }.validate().is_ok());
     }
 }

@@ -1,7 +1,8 @@
 //! Sources of the prescribed hinge angle φ(t) and its first two derivatives.
 
-use super::params::{check, ParamError, FINITE, POSITIVE};
+use super::params::{check, ParamError};
 use crate::math;
+use crate::range::Range;
 use std::f64::consts::PI;
 
 /// φ, φ', φ'' at one instant [rad, rad/s, rad/s²].
@@ -32,9 +33,9 @@ impl Default for PaperLaw {
 
 impl PaperLaw {
     pub fn validate(&self) -> Result<(), ParamError> {
-        check("phi0", self.phi0, FINITE)?;
-        check("phi_end", self.phi_end, FINITE)?;
-        check("t_rot", self.t_rot, POSITIVE)
+        check("phi0", self.phi0, Range::Finite)?;
+        check("phi_end", self.phi_end, Range::Finite)?;
+        check("t_rot", self.t_rot, Range::Positive)
     }
 
     /// The law at t: the turn's formula before t_rot, the hold from t_rot on.

@@ -1,7 +1,7 @@
 //! The formulations as first-order systems for the integrator, and the outputs they report.
 //!
 //! State layouts: `TwoDofSystem` (reduced, linear): y = (v1, ϑ1, v̇1, ϑ̇1);
-//! `DaeSystem` (dae, dae-stabilized): y = (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2).
+//! `DaeSystem` (dae, dae_stabilized): y = (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2).
 
 use super::dynamics::{BeamBody, Reactions};
 use super::kinematics::{pq, u1, u1_accel_bias};
@@ -45,7 +45,7 @@ pub fn check_drift(l: f64, drift: f64) -> Result<(), RangeViolation> {
             name: "drift",
             value: drift,
             allowed: "|u2 - u1(v1, theta1)| <= l/10 (the dae formulation drifts from its \
-                      constraint; dae-stabilized does not)",
+                      constraint; dae_stabilized does not)",
         });
     }
     Ok(())
@@ -125,10 +125,24 @@ pub struct Outputs {
 }
 
 impl Outputs {
-    /// Column names, in the order of [`values`](Self::values).
-    pub const COLUMNS: [&'static str; 15] = [
-        "t", "v1", "theta1", "u2", "dv1", "dtheta1", "du2", "phi", "dphi", "ddphi", "N", "P", "M",
-        "energy", "drift",
+    /// Column names and units, in the order of [`values`](Self::values): the FMU's names of
+    /// the same outputs.
+    pub const COLUMNS: [(&'static str, &'static str); 15] = [
+        ("t", "s"),
+        ("v1", "m"),
+        ("theta1", "rad"),
+        ("u2", "m"),
+        ("dv1", "m/s"),
+        ("dtheta1", "rad/s"),
+        ("du2", "m/s"),
+        ("phi_applied", "rad"),
+        ("dphi_applied", "rad/s"),
+        ("ddphi_applied", "rad/s2"),
+        ("N", "N"),
+        ("P", "N"),
+        ("M", "N.m"),
+        ("energy", "J"),
+        ("drift", "m"),
     ];
 
     pub fn values(&self) -> [f64; 15] {

@@ -16,29 +16,19 @@ pub use runner::run_cases;
 pub use sample::{normal_cdf, normal_quantile};
 
 use crate::model::{BeamBody, Formulation, Outputs};
-use crate::sim::{scene_entries, simulate_partial, Scene, SimError};
+use crate::scene::locate;
+use crate::settings::{Setting, SETTINGS};
+use crate::sim::{simulate_partial, Scene, SimError};
 use crate::solver::SolverError;
 use sample::{grid_point, latin_hypercube, name_key, open_unit};
 use std::fmt;
 use toml::{Table, Value};
 
-/// The numbers a study can vary: the model's parameters, the law and the initial state.
-pub const VARIABLES: [&str; 14] = [
-    "l",
-    "EI",
-    "m",
-    "M2",
-    "J_C",
-    "r",
-    "g",
-    "t_rot",
-    "phi_end",
-    "phi0",
-    "v1_0",
-    "theta1_0",
-    "dv1_0",
-    "dtheta1_0",
-];
+/// The settings a study can vary (`appears.study` in the table): the model's parameters, the
+/// law and the initial state.
+pub fn variables() -> impl Iterator<Item = &'static Setting> {
+    SETTINGS.iter().filter(|s| s.appears.study)
+}
 
 /// What a study computes per run, over the output times k·dt_out of the run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,6 +71,17 @@ impl Metric {
             Metric::MaxV1 => "max_v1",
             Metric::MaxTheta1 => "max_theta1",
             Metric::EnergyFinal => "energy_final",
+        }
+    }
+
+    /// The unit of the column.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Metric::ResidualV1 | Metric::MaxV1 => "m",
+            Metric::PeakM => "N.m",
+            Metric::PeakN | Metric::PeakP => "N",
+            Metric::MaxTheta1 => "rad",
+            Metric::EnergyFinal => "J",
         }
     }
 
@@ -265,9 +266,14 @@ impl Study {
         text: &str,
         load_scene: impl FnOnce(&str) -> Result<String, String>,
     ) -> Result<Study, String> {
-        let table: Table = text.parse().map_err(|e: toml::de::Error| {
-            format!("not a valid TOML file: {}", e.to_string().trim_end())
-        })?;
+        Self::parse_table(text, load_scene).map_err(|e| locate_field(text, e))
+    }
+
+    fn parse_table(
+        text: &str,
+        load_scene: impl FnOnce(&str) -> Result<String, String>,
+    ) -> Result<Study, String> {
+        let table: Table = text.parse().map_err(|e| crate::scene::syntax_error(text, &e))?;
         const TOP: [&str; 8] =
             ["scene", "formulation", "rtol", "atol", "metrics", "sampling", "set", "parameters"];
         check_keys(&table, "", &TOP)?;
@@ -279,14 +285,11 @@ impl Study {
         };
         if let Some(path) = &scene {
             let text = load_scene(path).map_err(|e| format!("`scene`: {e}"))?;
-            let entries = scene_entries(&text).map_err(|e| format!("scene {path}: {e}"))?;
-            for (line, key, val) in entries {
-                base.set(&key, &val).map_err(|e| format!("scene {path}:{line}: {e}"))?;
-            }
+            base.apply_toml(&text).map_err(|e| format!("scene {path}: {e}"))?;
         }
         for key in ["formulation", "rtol", "atol"] {
             if let Some(v) = table.get(key) {
-                base.set(key, &scalar_text(v, key)?).map_err(|e| format!("`{key}`: {e}"))?;
+                base.set_toml(key, v).map_err(|e| format!("`{key}`: {e}"))?;
             }
         }
         let set = match table.get("set") {
@@ -294,8 +297,7 @@ impl Study {
             None => None,
         };
         for (key, v) in set.into_iter().flatten() {
-            let field = format!("set.{key}");
-            base.set(key, &scalar_text(v, &field)?).map_err(|e| format!("`{field}`: {e}"))?;
+            base.set_toml(key, v).map_err(|e| format!("`set.{key}`: {e}"))?;
         }
         base.validate().map_err(|e| format!("the base scene: {e}"))?;
 
@@ -303,10 +305,11 @@ impl Study {
         if let Some(v) = table.get("parameters") {
             for (name, spec) in sub_table(v, "parameters")? {
                 let field = format!("parameters.{name}");
-                if !VARIABLES.contains(&name.as_str()) {
+                if !variables().any(|s| s.name == name) {
+                    let names: Vec<&str> = variables().map(|s| s.name).collect();
                     return Err(format!(
                         "`{field}`: unknown parameter `{name}`; a study can vary {}",
-                        VARIABLES.join(", ")
+                        names.join(", ")
                     ));
                 }
                 if set.is_some_and(|s| s.contains_key(name)) {
@@ -394,6 +397,13 @@ impl Study {
         Ok(Study { base, scene, parameters, metrics, samples, seed, cases })
     }
 
+    /// A hash of the parsed study and its resolved base scene (16 hex digits): the same for
+    /// files that differ only in comments, layout, key order or the spelling of a number, and
+    /// different for any change to what the study runs.
+    pub fn fingerprint(&self) -> String {
+        format!("{:016x}", crate::hash::fnv1a_64(format!("{self:?}").as_bytes()))
+    }
+
     /// The number of cases: the product of the grids' counts, times the samples.
     pub fn cases(&self) -> u64 {
         self.cases
@@ -417,11 +427,19 @@ impl Study {
         self.samples
     }
 
-    /// The columns of the results table, in order.
+    /// The columns of the results table, in order: a column with a unit is headed
+    /// `name [unit]`, as the CLI's CSV is.
     pub fn columns(&self) -> Vec<(String, ColumnType)> {
         let mut cols = vec![("case".to_string(), ColumnType::Int)];
-        cols.extend(self.parameters.iter().map(|p| (p.name.clone(), ColumnType::Float)));
-        cols.extend(self.metrics.iter().map(|m| (m.name().to_string(), ColumnType::Float)));
+        cols.extend(self.parameters.iter().map(|p| {
+            let unit = Setting::by_name(&p.name).ok().and_then(|s| s.unit());
+            (crate::csv::header(&p.name, unit), ColumnType::Float)
+        }));
+        cols.extend(
+            self.metrics
+                .iter()
+                .map(|m| (crate::csv::header(m.name(), Some(m.unit())), ColumnType::Float)),
+        );
         cols.push(("status".into(), ColumnType::Text));
         cols.push(("message".into(), ColumnType::Text));
         cols.push(("steps".into(), ColumnType::Int));
@@ -498,7 +516,10 @@ impl Study {
             0.0 // unused; an invalid model is reported by the run
         };
         let mut acc = Accumulator::new(v1_eq, scene.law.t_rot);
-        let (report, result) = simulate_partial(&scene, |o| acc.add(o));
+        let (report, result) = simulate_partial(&scene, |o| {
+            acc.add(o);
+            std::ops::ControlFlow::Continue(())
+        });
         row.steps = report.stats.steps;
         match result {
             Ok(()) => {
@@ -519,9 +540,9 @@ impl Study {
             }
             Err(e) => {
                 row.status = match &e {
-                    SimError::Param(_) | SimError::Setting(_) => Status::Invalid,
+                    SimError::Setting(_) => Status::Invalid,
                     SimError::Solver(SolverError::OutOfRange { .. }) => Status::Stopped,
-                    SimError::Solver(_) => Status::Failed,
+                    SimError::Solver(_) | SimError::Stopped => Status::Failed,
                 };
                 row.message = e.to_string();
             }
@@ -811,14 +832,21 @@ fn count(v: Option<&Value>, field: &str) -> Result<u64, String> {
     }
 }
 
-/// A scalar TOML value as the text [`Scene::set`] takes.
-fn scalar_text(v: &Value, field: &str) -> Result<String, String> {
-    match v {
-        Value::String(s) => Ok(s.clone()),
-        Value::Integer(i) => Ok(i.to_string()),
-        Value::Float(x) => Ok(format!("{x:?}")),
-        Value::Boolean(b) => Ok(b.to_string()),
-        _ => Err(format!("`{field}`: must be a number, a string or a boolean")),
+/// `message`, prefixed with the line of the field it names first (`` `parameters.EI.count`:
+/// … ``), when the study's text has it.
+fn locate_field(text: &str, message: String) -> String {
+    let field = message
+        .strip_prefix('`')
+        .and_then(|rest| rest.split_once('`'))
+        .map(|(field, _)| field.to_string());
+    match field {
+        Some(field) => {
+            // `metrics[2]` and `values[0]` are on the line of their list.
+            let path: Vec<&str> =
+                field.split('.').map(|k| k.split_once('[').map_or(k, |(k, _)| k)).collect();
+            locate(text, &path, message)
+        }
+        None => message,
     }
 }
 

@@ -25,8 +25,7 @@ fn hash3(a: u64, b: u64, c: u64) -> u64 {
 /// 64-bit FNV-1a of a name: the key of a parameter's samples, so that adding or removing
 /// another parameter leaves its column unchanged.
 pub(crate) fn name_key(name: &str) -> u64 {
-    name.bytes()
-        .fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+    crate::hash::fnv1a_64(name.as_bytes())
 }
 
 /// A pseudo-random permutation of 0..n, evaluated one element at a time: a balanced Feistel

@@ -30,7 +30,16 @@ fn a_grid_study_numbers_its_cases_with_the_first_parameter_slowest() {
     let names: Vec<_> = study.columns().into_iter().map(|(n, _)| n).collect();
     assert_eq!(
         names,
-        ["case", "t_rot", "M2", "residual_v1", "peak_M", "status", "message", "steps"]
+        [
+            "case",
+            "t_rot [s]",
+            "M2 [kg]",
+            "residual_v1 [m]",
+            "peak_M [N.m]",
+            "status",
+            "message",
+            "steps"
+        ]
     );
 }
 
@@ -254,7 +263,9 @@ fn bad_study_files_name_the_field() {
         ("sceen = \"x.toml\"", "`sceen`: unknown key"),
         ("[parameters.M2]\nvalues = [1, \"a\"]", "`parameters.M2.values[1]`: must be a number"),
         ("[parameters.l]\nstart = 0\nstop = 2\ncount = 3\nspacing = \"log\"", "log grid"),
-        ("x = ", "not a valid TOML file"),
+        ("x = ", "line 1, column 5: not valid TOML"),
+        ("[set]\nt_end = 1\nt_end = 2", "line 3, column 1: not valid TOML"),
+        ("[set]\nt_end = \"5\"", "`set.t_end`: `t_end` = \"5\": must be a number"),
         ("[parameters.M2]\nvalues = [6, -1]", "`parameters.M2.values[1]`"),
         ("[parameters.M2]\nstart = 6\nstop = 9\ncount = 1", "`parameters.M2.stop` = 9"),
         ("[parameters.M2]\nstart = 6\nstop = 6\ncount = 3", "must differ from start"),
@@ -267,6 +278,15 @@ fn bad_study_files_name_the_field() {
     for (text, want) in cases {
         let e = parse(text).unwrap_err();
         assert!(e.contains(want), "{text:?}\n  gave: {e}\n  want: {want}");
+    }
+    // The line of the field named, for the CLI's `FILE:LINE: …`.
+    for (text, line) in [
+        ("\n[parameters.M2]\nstart = 1\nstop = 10\ncount = 0", "line 5: `parameters.M2.count`"),
+        ("rtol = 1e-6\nmetrics = [\"peak_Q\"]", "line 2: `metrics[0]`"),
+        ("[set]\nt_end = 0", "line 2: `set.t_end`"),
+    ] {
+        let e = parse(text).unwrap_err();
+        assert!(e.starts_with(line), "{text:?}\n  gave: {e}\n  want: {line}");
     }
 }
 

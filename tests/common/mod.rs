@@ -192,8 +192,13 @@ pub fn guid_c() -> CString {
 }
 
 impl Host {
+    /// An instance that takes phi from the host (`phi_source` = input), as most tests drive
+    /// it.
     pub fn new(name: &str) -> Host {
-        Host::with_logging(name, false)
+        let h = Host::with_logging(name, false);
+        assert_eq!(h.set_integer(Var::PhiSource, 1), OK);
+        h.log.take();
+        h
     }
 
     pub fn with_logging(name: &str, logging_on: bool) -> Host {
@@ -215,6 +220,11 @@ impl Host {
         };
         assert!(!c.is_null(), "fmi2Instantiate failed: {:?}", log.records());
         Host { c, name: name.to_string(), log, callbacks }
+    }
+
+    /// An instance as instantiated, with the table's start values (`phi_source` = law).
+    pub fn plain(name: &str) -> Host {
+        Host::with_logging(name, false)
     }
 
     /// The records since the last call, each checked for format, environment and name.
@@ -242,6 +252,7 @@ impl Host {
         let records = self.take();
         assert_eq!(status, want, "status; log: {records:#?}");
         let category = match want {
+            WARNING => "logStatusWarning",
             DISCARD => "logStatusDiscard",
             ERROR => "logStatusError",
             FATAL => "logStatusFatal",

@@ -96,7 +96,7 @@ fn sample(args: &[String]) {
     };
     let formulation = match formulation.as_str() {
         "dae" => Formulation::Dae,
-        "dae-stabilized" => Formulation::DaeStabilized,
+        "dae_stabilized" => Formulation::DaeStabilized,
         "linear" => Formulation::Linear,
         _ => Formulation::Reduced,
     };

@@ -26,7 +26,7 @@ DEFAULT_DIR = REPO / "target" / "bench"
 SCENES = {
     "paper": ("scenes/paper.toml", "reduced"),
     "paper-dae": ("scenes/paper.toml", "dae"),
-    "paper-dae-stabilized": ("scenes/paper.toml", "dae-stabilized"),
+    "paper-dae-stabilized": ("scenes/paper.toml", "dae_stabilized"),
     "stiff": ("scenes/stiff.toml", "reduced"),
 }
 
@@ -44,7 +44,7 @@ COSTS_HEADER = ["round", "scene", "rhs_ns", "lu_ns", "solve_ns", "rhs_throughput
 
 
 def is_dae(formulation: str) -> bool:
-    return formulation in ("dae", "dae-stabilized")
+    return formulation in ("dae", "dae_stabilized")
 
 
 def state_names(scene: str):

@@ -652,7 +652,7 @@ def markdown(cases, curves, scenes, costs, ref_texts, notes, args, date, cores):
         L.append("## Constraint residuals of the DAE formulations")
         L.append("")
         L.append("Max over the grid of |u2 − u1(v1, θ1)| and |du2 − d/dt u1| (the index-1 formulation "
-                 "drifts; dae-stabilized projects; scipy's dae-stabilized projects only its output).")
+                 "drifts; dae_stabilized projects; scipy's dae_stabilized projects only its output).")
         L.append("")
         L.append("| scene | solver | rtol | max \\|u2 − u1\\| [m] | max \\|du2 − du1\\| [m/s] |")
         L.append("|---|---|---|---|---|")

@@ -156,7 +156,7 @@ class Problem:
             y0 = [y0[0], y0[1], float(u), y0[2], y0[3], float(du)]
         self.y0 = np.array(y0, dtype=float)
         self.n_dof = len(self.y0) // 2
-        self.project = self.formulation == "dae-stabilized"
+        self.project = self.formulation == "dae_stabilized"
 
 
 def solve_case(prob: Problem, method: str, rtol: float, max_seconds: float):

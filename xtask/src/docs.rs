@@ -45,7 +45,7 @@ fn type_cell(v: &Variable) -> String {
 
 fn start_cell(v: &Variable) -> String {
     match v.ty {
-        Type::Real { start: Some(x), .. } => x.to_string(),
+        Type::Real { start: Some(x), .. } => crate::model_description::real(x).unwrap_or_default(),
         Type::Real { start: None, .. } => String::new(),
         Type::Integer { start, .. } => start.to_string(),
         Type::Enumeration { ty, start } => {
@@ -60,6 +60,16 @@ fn start_cell(v: &Variable) -> String {
 }
 
 fn range_cell(v: &Variable) -> String {
+    // A parameter's range in the words of the settings table: "> 0" where the XML's `min` is
+    // the smallest positive double.
+    if let (Some(key), Type::Real { .. }) = (v.setting, v.ty) {
+        return match beam_body::settings::Setting::of(key).range {
+            beam_body::range::Range::Positive => "> 0".to_string(),
+            beam_body::range::Range::NonNegative => "≥ 0".to_string(),
+            beam_body::range::Range::Finite => "finite".to_string(),
+            other => other.to_string(),
+        };
+    }
     let (min, max) = match v.ty {
         Type::Real { min, max, .. } => (min.map(|x| x.to_string()), max.map(|x| x.to_string())),
         Type::Integer { min, max, .. } => (Some(min.to_string()), Some(max.to_string())),

@@ -75,12 +75,15 @@ pub fn stale_message() -> String {
     format!("{RELATIVE_PATH} is stale: run `cargo xtask gen`")
 }
 
-/// A real as the XML writes it: Rust's `Display` of f64, the shortest decimal string that
-/// parses back to the same f64, and never in exponent form ("0.000001", "3.141592653589793"),
-/// which the schema's xs:double accepts. Non-finite values have no place in the tables.
+/// A real as the XML writes it: the shortest decimal string that parses back to the same
+/// f64 (xs:double accepts both forms): Rust's `Display` ("0.000001", "3.141592653589793")
+/// for ordinary magnitudes, the exponent form ("2.2250738585072014e-308", the `min` of a
+/// positive parameter) for tiny and huge ones, where `Display` would write hundreds of
+/// digits. Non-finite values have no place in the tables.
 pub fn real(x: f64) -> Result<String> {
     if x.is_finite() {
-        Ok(x.to_string())
+        let ordinary = x == 0.0 || (1e-7..1e16).contains(&x.abs());
+        Ok(if ordinary { x.to_string() } else { format!("{x:e}") })
     } else {
         Err(format!("the non-finite value {x} cannot be written to the modelDescription").into())
     }
@@ -430,7 +433,8 @@ mod tests {
             [0.0, -0.0, 2.5, 1e-6, 0.0085, 10.2, std::f64::consts::PI, 1e-300, 1.7e308, 0.1 + 0.2]
         {
             let text = real(x).unwrap();
-            assert!(!text.contains('e') && !text.contains("inf"), "{text}");
+            assert!(!text.contains("inf") && text.len() <= 24, "{text}");
+            assert_eq!(text.contains('e'), x.abs() < 1e-7 && x != 0.0 || x.abs() >= 1e16, "{text}");
             assert_eq!(f64_of(&text).to_bits(), x.to_bits(), "{text}");
         }
         assert!(real(f64::NAN).is_err() && real(f64::INFINITY).is_err());

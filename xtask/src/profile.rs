@@ -27,7 +27,7 @@ pub fn run() -> Result {
     for (label, scene, formulation) in [
         ("paper", "scenes/paper.toml", "reduced"),
         ("paper-dae", "scenes/paper.toml", "dae"),
-        ("paper-dae-stabilized", "scenes/paper.toml", "dae-stabilized"),
+        ("paper-dae-stabilized", "scenes/paper.toml", "dae_stabilized"),
         ("stiff", "scenes/stiff.toml", "reduced"),
     ] {
         let out = Command::new(&python)

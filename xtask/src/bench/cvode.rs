@@ -33,7 +33,7 @@
 //! `Bdf::evaluate_jacobian` reproduces. Its f-evaluations are in `rhs_evals`
 //! (`CVodeGetNumLinRhsEvals`).
 //!
-//! dae-stabilized: the projection of `DaeSystem::project` after every step, through
+//! dae_stabilized: the projection of `DaeSystem::project` after every step, through
 //! `CVodeSetProjFn` (CVODE ≥ 5.3, BDF only), before the error test, with CVODE's default
 //! error projection: the error estimate is mapped by the derivative of the projection. Ours
 //! instead adds the projection's correction to the step's correction and tests that. The
@@ -642,7 +642,8 @@ where
         }
         s.check((api.set_linear_solver)(s.mem, s.linsol, s.matrix), "CVodeSetLinearSolver", &log)?;
         s.check((api.set_user_data)(s.mem, data_ptr), "CVodeSetUserData", &log)?;
-        let max_steps = c_long::try_from(scene.solver.max_steps).unwrap_or(c_long::MAX);
+        let max_steps = c_long::try_from(beam_body::solver::BdfConfig::default().max_steps)
+            .unwrap_or(c_long::MAX);
         s.check((api.set_max_num_steps)(s.mem, max_steps), "CVodeSetMaxNumSteps", &log)?;
         if projecting {
             s.check((api.set_proj_fn)(s.mem, project::<S, N>), "CVodeSetProjFn", &log)?;
@@ -717,7 +718,7 @@ mod tests {
     fn ours(p: &Problem, rtol: f64) -> Vec<Vec<f64>> {
         let mut scene = p.scene.clone();
         scene.solver.rtol = rtol;
-        scene.solver.atol = None;
+        scene.solver.atol = 0.0;
         let dae = scene.formulation.is_dae();
         let mut rows = Vec::new();
         simulate(&scene, |o| {

@@ -17,10 +17,10 @@
 //! from the state reached (order 1, diffsol's own initial step). The grid values come from
 //! diffsol's interpolation inside the last step (`interpolate_inplace`).
 //!
-//! dae-stabilized: diffsol has no hook to project after each step (changing its state
+//! dae_stabilized: diffsol has no hook to project after each step (changing its state
 //! restarts it at order 1), so it integrates the DAE unprojected and only the grid values are
 //! projected (`DaeSystem::project`, as our driver's outputs are). Ours also projects after
-//! every step. So diffsol's dae-stabilized is its dae plus projected outputs.
+//! every step. So diffsol's dae_stabilized is its dae plus projected outputs.
 #![cfg(feature = "bench")]
 
 use std::cell::{Cell, RefCell};

@@ -2,8 +2,9 @@
 //! `bdf-fixed` (the paper's constant-step mode), both through [`beam_body::sim::simulate`],
 //! the driver of the CLI: it lands on the law's breakpoint t_rot and restarts there.
 
+use beam_body::model::Sample;
 use beam_body::sim::{Run, Scene};
-use beam_body::solver::{FixedStep, Stats};
+use beam_body::solver::{BdfConfig, Stats};
 
 use super::problem::{Counters, Outcome, Problem, States};
 
@@ -23,8 +24,8 @@ pub const FIXED_NEWTON_RTOL: f64 = 1e-10;
 pub fn bdf(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
     let mut scene = problem.scene.clone();
     scene.solver.rtol = rtol;
-    scene.solver.atol = None;
-    scene.solver.fixed_step = None;
+    scene.solver.atol = 0.0;
+    scene.solver.fixed_step = 0.0;
     solve(problem, &scene)
 }
 
@@ -32,8 +33,9 @@ pub fn bdf(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
 pub fn bdf_fixed(problem: &Problem, h: f64) -> Result<Outcome, String> {
     let mut scene = problem.scene.clone();
     scene.solver.rtol = FIXED_NEWTON_RTOL;
-    scene.solver.atol = None;
-    scene.solver.fixed_step = Some(FixedStep { h, order: FIXED_ORDER });
+    scene.solver.atol = 0.0;
+    scene.solver.fixed_step = h;
+    scene.solver.fixed_order = FIXED_ORDER;
     solve(problem, &scene)
 }
 
@@ -41,9 +43,9 @@ pub fn bdf_fixed(problem: &Problem, h: f64) -> Result<Outcome, String> {
 /// from its dense output. Like the other solvers, it records the states only; the CLI's
 /// `simulate` would also compute accelerations, reactions and energy at every grid point.
 fn solve(problem: &Problem, scene: &Scene) -> Result<Outcome, String> {
-    let model = scene.validate().map_err(|err| err.to_string())?;
-    let (law, init) = (scene.law, scene.initial);
-    let mut run = Run::with_law(model, scene.formulation, &scene.solver, 0.0, init, law)
+    scene.validate()?;
+    let max_steps = BdfConfig::default().max_steps;
+    let mut run = Run::start(scene, 0.0, Sample::value(0.0, 0.0), max_steps)
         .map_err(|err| err.to_string())?;
     let mut states = States::with_capacity(problem.grid.len());
     let mut y = [0.0; 6];

@@ -5,7 +5,7 @@ use std::fs;
 use std::path::Path;
 
 use beam_body::model::{BeamBody, DaeSystem, Formulation, PhiPiece, TwoDofSystem};
-use beam_body::sim::{scene_entries, Scene};
+use beam_body::sim::Scene;
 use beam_body::solver::OdeSystem;
 use nalgebra::{SVector, Vector4, Vector6};
 
@@ -33,7 +33,7 @@ pub trait WithSystem {
 }
 
 /// Calls `w` with the scene's formulation as a system of 4 (reduced, linear) or 6 (dae,
-/// dae-stabilized) states and its initial state, the DAE's u2 and u̇2 made consistent with
+/// dae_stabilized) states and its initial state, the DAE's u2 and u̇2 made consistent with
 /// the constraint as `Run` starts them.
 pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::Output {
     let init = scene.initial;
@@ -126,18 +126,12 @@ impl States {
     }
 }
 
-/// A scene file (flat `key = value` TOML, as the CLI reads it) on top of the defaults; errors
-/// name the file and the line.
+/// A scene file (TOML, as the CLI reads it) on top of the defaults; errors name the file and
+/// the line.
 pub fn read_scene(path: &Path) -> Result<Scene, String> {
     let text =
         fs::read_to_string(path).map_err(|err| format!("cannot read {}: {err}", relative(path)))?;
-    let mut scene = Scene::default();
-    for (line, key, value) in
-        scene_entries(&text).map_err(|e| format!("{}: {e}", relative(path)))?
-    {
-        scene.set(&key, &value).map_err(|err| format!("{}:{line}: {err}", relative(path)))?;
-    }
-    Ok(scene)
+    Scene::from_toml(&text).map_err(|e| format!("{}: {e}", relative(path)))
 }
 
 /// The problem of a scene of [`SCENES`], read from its scene file.

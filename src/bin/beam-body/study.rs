@@ -1,0 +1,362 @@
+//! `beam-body study`: a design study on every core, one CSV row per case.
+
+use crate::args::at_file;
+use crate::{note, print, stdout_failed, CmdResult, Failure};
+use beam_body::csv;
+use beam_body::study::{run_cases, Row, Status, Study};
+use lexopt::prelude::*;
+use std::ffi::OsString;
+use std::io::{self, BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+pub const HELP: &str = "\
+usage: beam-body study STUDY.toml [OPTIONS] [-o OUT.csv]
+       beam-body study STUDY.toml --plan
+
+Runs a design study (README: Design studies) on every core and writes one CSV row per
+case: case, the parameters, the metrics, status, message, steps (headers name their
+units, as simulate's do). The rows go to stdout, or to OUT.csv, which appears when the
+study is done. The number of cases is stated first, on stderr.
+
+options:
+  --cases A..B        run cases A..B (half-open) only
+  --threads N         threads, 1..=1024 (default: one per core)
+  --scene FILE        the base scene FILE instead of the study's `scene`
+  --max-cases N       refuse to run more than N cases (default 1000000)
+  --quiet, -q         no progress or summary on stderr
+  --plan              check the study and print, as JSON, its number of cases, its
+                      columns, its base scene and its fingerprint; run nothing
+  -o, --output FILE   write the CSV to FILE
+  -h, --help          this text
+";
+
+/// The most threads `--threads` takes.
+const MAX_THREADS: usize = 1024;
+/// The default of `--max-cases`.
+const MAX_CASES_DEFAULT: u64 = 1_000_000;
+
+struct StudyArgs {
+    file: String,
+    output: Option<String>,
+    cases: Option<(u64, u64)>,
+    threads: Option<usize>,
+    scene: Option<String>,
+    max_cases: u64,
+    quiet: bool,
+    plan: bool,
+}
+
+fn parse(args: Vec<OsString>) -> Result<Option<StudyArgs>, Failure> {
+    let mut parser = lexopt::Parser::from_args(args);
+    let bad = |e: lexopt::Error| Failure::Usage(format!("study: {e} (beam-body study --help)"));
+    let mut a = StudyArgs {
+        file: String::new(),
+        output: None,
+        cases: None,
+        threads: None,
+        scene: None,
+        max_cases: MAX_CASES_DEFAULT,
+        quiet: false,
+        plan: false,
+    };
+    let mut file = None;
+    while let Some(arg) = parser.next().map_err(bad)? {
+        match arg {
+            Long("help") | Short('h') => {
+                print(HELP)?;
+                return Ok(None);
+            }
+            Short('o') | Long("output") => {
+                a.output = Some(parser.value().map_err(bad)?.string().map_err(bad)?)
+            }
+            Long("cases") => {
+                let text = parser.value().map_err(bad)?.string().map_err(bad)?;
+                let range = text.split_once("..").and_then(|(x, y)| {
+                    Some((x.trim().parse::<u64>().ok()?, y.trim().parse::<u64>().ok()?))
+                });
+                a.cases = match range {
+                    Some((x, y)) if x <= y => Some((x, y)),
+                    _ => {
+                        return Err(Failure::Usage(format!(
+                            "--cases {text}: expected A..B with integers 0 <= A <= B"
+                        )))
+                    }
+                };
+            }
+            Long("threads") => {
+                let text = parser.value().map_err(bad)?.string().map_err(bad)?;
+                a.threads = match text.parse::<usize>() {
+                    Ok(n) if (1..=MAX_THREADS).contains(&n) => Some(n),
+                    _ => {
+                        return Err(Failure::Usage(format!(
+                            "--threads {text}: must be an integer in 1..={MAX_THREADS}"
+                        )))
+                    }
+                };
+            }
+            Long("max-cases") => {
+                let text = parser.value().map_err(bad)?.string().map_err(bad)?;
+                a.max_cases = match text.parse::<u64>() {
+                    Ok(n) if n >= 1 => n,
+                    _ => {
+                        return Err(Failure::Usage(format!(
+                            "--max-cases {text}: must be a positive integer"
+                        )))
+                    }
+                };
+            }
+            Long("scene") => a.scene = Some(parser.value().map_err(bad)?.string().map_err(bad)?),
+            Long("quiet") | Short('q') => a.quiet = true,
+            Long("plan") => a.plan = true,
+            Value(v) if file.is_none() => file = Some(v.string().map_err(bad)?),
+            other => return Err(bad(other.unexpected())),
+        }
+    }
+    a.file = file.ok_or_else(|| {
+        Failure::Usage("study needs a study file (beam-body study --help)".into())
+    })?;
+    if let Some(o) = a.output.as_ref().filter(|o| o.to_ascii_lowercase().ends_with(".parquet")) {
+        return Err(Failure::Usage(format!(
+            "-o {o}: beam-body study writes CSV; the study tool writes Parquet: \
+             beam-body-study run {} -o {o} (or cargo xtask study run ...)",
+            a.file
+        )));
+    }
+    Ok(Some(a))
+}
+
+pub fn run(args: Vec<OsString>) -> CmdResult {
+    let Some(a) = parse(args)? else {
+        return Ok(());
+    };
+    let text = std::fs::read_to_string(&a.file)
+        .map_err(|e| Failure::Usage(format!("cannot read the study file {}: {e}", a.file)))?;
+    // The base scene: --scene, or the study's `scene` relative to the study file.
+    let dir = Path::new(&a.file).parent().unwrap_or(Path::new("")).to_path_buf();
+    let mut scene_file: Option<PathBuf> = None;
+    let study = Study::parse(&text, |path| {
+        let file = a.scene.as_ref().map_or_else(|| dir.join(path), PathBuf::from);
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| format!("cannot read the scene file {}: {e}", file.display()));
+        scene_file = Some(file);
+        text
+    })
+    .map_err(|e| Failure::Usage(at_file(&a.file, &e)))?;
+    if let (Some(scene), None) = (&a.scene, study.scene_path()) {
+        return Err(Failure::Usage(format!(
+            "--scene {scene}: the study {} names no base scene (`scene = \"...\"`) to replace",
+            a.file
+        )));
+    }
+    let total = study.cases();
+    let (first, end) = a.cases.unwrap_or((0, total));
+    if end > total {
+        return Err(Failure::Usage(format!(
+            "--cases {first}..{end}: the study has {total} cases (0..{total})"
+        )));
+    }
+    if a.plan {
+        return print(&format!("{}\n", plan_json(&study, scene_file.as_deref())));
+    }
+    let n = end - first;
+    if n > a.max_cases {
+        return Err(Failure::Usage(format!(
+            "{}: {n} cases to run, more than --max-cases {}: check the study's counts and \
+             samples, or pass --max-cases {n} to run them all",
+            a.file, a.max_cases
+        )));
+    }
+    let threads =
+        a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if !a.quiet {
+        note(format_args!("study: {n} cases of {total} on {threads} threads"));
+    }
+
+    // The rows go to a temporary file beside OUT, renamed to OUT once all are written; into
+    // OUT directly where it exists and is not a regular file (a device, a pipe).
+    let special = |out: &String| std::fs::metadata(out).is_ok_and(|m| !m.is_file());
+    let partial = a
+        .output
+        .as_ref()
+        .filter(|out| !special(out))
+        .map(|out| format!("{out}.partial-{}", std::process::id()));
+    let sink: Box<dyn Write> = match (&partial, &a.output) {
+        (Some(path), _) | (None, Some(path)) => Box::new(
+            std::fs::File::create(path)
+                .map_err(|e| Failure::Usage(format!("cannot create {path}: {e}")))?,
+        ),
+        (None, None) => Box::new(io::stdout().lock()),
+    };
+    let mut out = BufWriter::new(sink);
+    let header: Vec<String> = study.columns().into_iter().map(|(name, _)| name).collect();
+    let mut progress = Progress::new(n, threads, a.quiet);
+    let mut counts = [0u64; 5];
+    let mut line = String::new();
+    let start = Instant::now();
+    let result = writeln!(out, "{}", header.join(",")).and_then(|()| {
+        run_cases(
+            &study,
+            first..end,
+            threads,
+            |done| progress.update(done),
+            |row| {
+                counts[row.status as usize] += 1;
+                line.clear();
+                study_row(&mut line, &row);
+                out.write_all(line.as_bytes())
+            },
+        )
+    });
+    let result = result.and_then(|()| out.flush());
+    drop(out);
+    let elapsed = start.elapsed();
+    progress.finish();
+    if let Err(e) = result {
+        if let Some(p) = &partial {
+            let _ = std::fs::remove_file(p);
+        }
+        return Err(match &a.output {
+            None => stdout_failed(e),
+            Some(path) => Failure::Usage(format!("writing {path} failed: {e}")),
+        });
+    }
+    if let (Some(p), Some(out)) = (&partial, &a.output) {
+        std::fs::rename(p, out)
+            .map_err(|e| Failure::Usage(format!("cannot rename {p} to {out}: {e}")))?;
+    }
+    if !a.quiet {
+        let secs = elapsed.as_secs_f64();
+        let statuses: Vec<String> = [Status::Ok, Status::Warning, Status::Stopped]
+            .into_iter()
+            .chain([Status::Failed, Status::Invalid])
+            .filter(|&s| counts[s as usize] > 0)
+            .map(|s| format!("{} {}", s.name(), counts[s as usize]))
+            .collect();
+        note(format_args!(
+            "study: {n} cases in {secs:.2} s, {:.0} cases/s on {threads} threads; {}",
+            n as f64 / secs.max(1e-9),
+            if statuses.is_empty() { "no cases".to_string() } else { statuses.join(", ") }
+        ));
+    }
+    Ok(())
+}
+
+/// One CSV row into `line`: numbers as `simulate` writes them, an empty field for a metric
+/// the run did not reach, the message quoted as RFC 4180 has it.
+fn study_row(line: &mut String, row: &Row) {
+    line.push_str(&row.case.to_string());
+    for v in &row.values {
+        line.push(',');
+        csv::push_number(line, *v);
+    }
+    for m in &row.metrics {
+        line.push(',');
+        if let Some(v) = m {
+            csv::push_number(line, *v);
+        }
+    }
+    // One line per row, whatever a message holds.
+    let msg = row.message.replace(['\n', '\r'], " ");
+    line.push(',');
+    line.push_str(row.status.name());
+    line.push(',');
+    if msg.contains([',', '"']) {
+        line.push('"');
+        line.push_str(&msg.replace('"', "\"\""));
+        line.push('"');
+    } else {
+        line.push_str(&msg);
+    }
+    line.push(',');
+    line.push_str(&row.steps.to_string());
+    line.push('\n');
+}
+
+/// `study --plan`: what the study is, as JSON.
+fn plan_json(study: &Study, scene_file: Option<&Path>) -> String {
+    let quote = |s: &str| {
+        let mut q = String::from('"');
+        for c in s.chars() {
+            match c {
+                '"' => q.push_str("\\\""),
+                '\\' => q.push_str("\\\\"),
+                c if (c as u32) < 0x20 => q.push_str(&format!("\\u{:04x}", c as u32)),
+                c => q.push(c),
+            }
+        }
+        q.push('"');
+        q
+    };
+    let list = |items: Vec<String>| format!("[{}]", items.join(", "));
+    let scene = scene_file
+        .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf()))
+        .map_or("null".to_string(), |p| quote(&p.to_string_lossy()));
+    let columns = study
+        .columns()
+        .into_iter()
+        .map(|(name, ty)| format!("{{\"name\": {}, \"type\": \"{ty}\"}}", quote(&name)))
+        .collect();
+    format!(
+        "{{\"cases\": {}, \"samples\": {}, \"scene\": {scene}, \"fingerprint\": \"{}\", \
+         \"parameters\": {}, \"metrics\": {}, \"columns\": {}}}",
+        study.cases(),
+        study.samples(),
+        study.fingerprint(),
+        list(study.parameters().iter().map(|p| quote(&p.name)).collect()),
+        list(study.metrics().iter().map(|m| quote(m.name())).collect()),
+        list(columns)
+    )
+}
+
+/// The progress line of `study` on stderr: redrawn in place on a terminal, a line every 10 s
+/// otherwise.
+struct Progress {
+    total: u64,
+    threads: usize,
+    start: Instant,
+    last: Option<Instant>,
+    every: Duration,
+    terminal: bool,
+    quiet: bool,
+}
+
+impl Progress {
+    fn new(total: u64, threads: usize, quiet: bool) -> Self {
+        let terminal = io::stderr().is_terminal();
+        let every = Duration::from_millis(if terminal { 250 } else { 10_000 });
+        Self { total, threads, start: Instant::now(), last: None, every, terminal, quiet }
+    }
+
+    fn update(&mut self, done: u64) {
+        let now = Instant::now();
+        if self.quiet || now.duration_since(self.last.unwrap_or(self.start)) < self.every {
+            return;
+        }
+        self.last = Some(now);
+        let secs = now.duration_since(self.start).as_secs_f64();
+        let rate = done as f64 / secs.max(1e-9);
+        let left = if done > 0 {
+            format!("{:.0} s left", (self.total - done) as f64 / rate)
+        } else {
+            "time left unknown".to_string()
+        };
+        let line = format!(
+            "study: {done}/{} cases  {:.0} %  {rate:.0} cases/s on {} threads  {left}",
+            self.total,
+            100.0 * done as f64 / self.total.max(1) as f64,
+            self.threads
+        );
+        if self.terminal {
+            let _ = write!(io::stderr().lock(), "\r{line}\x1b[K");
+        } else {
+            note(format_args!("{line}"));
+        }
+    }
+
+    fn finish(&self) {
+        if self.terminal && !self.quiet && self.last.is_some() {
+            note(format_args!(""));
+        }
+    }
+}

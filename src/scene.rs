@@ -1,0 +1,475 @@
+//! A scene: every setting of one run, as the table [`SETTINGS`] lists them, and the checks
+//! that need several of them at once. The CLI reads it from a scene file and `--set`, a study
+//! from its files, the FMU from its parameters: one value, one set of rules.
+//!
+//! No I/O: text comes in, a scene or an error that names the setting (and, from a file, the
+//! line) goes out.
+#![forbid(unsafe_code)]
+
+use crate::model::{BeamBody, Formulation, Interpolation, PaperLaw, Params, RangeCheck};
+use crate::settings::{Key, Setting, Value, SETTINGS};
+use crate::solver::{BdfConfig, FixedStep};
+
+/// Initial state of the beam [m, rad, m/s, rad/s]. The DAE's u2, u̇2 start consistent.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InitialState {
+    pub v1: f64,
+    pub theta1: f64,
+    pub dv1: f64,
+    pub dtheta1: f64,
+}
+
+/// Where φ comes from (`phi_source`). In the CLI, `Input` feeds the law's samples at every
+/// `dt_comm` exactly as an FMI host feeds the FMU, so that the two can be compared.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhiSource {
+    Input,
+    Law,
+}
+
+impl PhiSource {
+    /// In the order of the enumeration's items.
+    pub const ALL: [PhiSource; 2] = [PhiSource::Input, PhiSource::Law];
+}
+
+/// The integrator's settings as the table has them: plain numbers, 0 for "the default".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    pub rtol: f64,
+    /// 0: 1e-3·rtol.
+    pub atol: f64,
+    pub max_order: usize,
+    /// 0: the adaptive BDF.
+    pub fixed_step: f64,
+    /// 0: order 2 (with `fixed_step`).
+    pub fixed_order: usize,
+    pub stability_guard: bool,
+}
+
+impl SolverSettings {
+    /// The integrator's configuration, with at most `max_steps` steps per call.
+    pub fn config(&self, max_steps: u64) -> BdfConfig {
+        let order = if self.fixed_order == 0 { 2 } else { self.fixed_order };
+        BdfConfig {
+            rtol: self.rtol,
+            atol: (self.atol > 0.0).then_some(self.atol),
+            max_order: self.max_order,
+            fixed_step: (self.fixed_step > 0.0).then_some(FixedStep { h: self.fixed_step, order }),
+            stability_guard: self.stability_guard,
+            max_steps,
+            ..BdfConfig::default()
+        }
+    }
+
+    /// The absolute tolerance in use.
+    pub fn atol(&self) -> f64 {
+        self.config(1).atol()
+    }
+}
+
+/// A scene: what to simulate and how to sample it. Its fields are the table's settings;
+/// [`Scene::default`] holds the table's defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub params: Params,
+    pub law: PaperLaw,
+    pub initial: InitialState,
+    pub formulation: Formulation,
+    pub phi_source: PhiSource,
+    pub phi_interpolation: Interpolation,
+    pub phi_extrapolation: usize,
+    /// The CLI's emulated host also sends φ′, φ″ (`phi_source = input`).
+    pub input_derivatives: bool,
+    /// The CLI's emulated host's communication step [s].
+    pub dt_comm: f64,
+    pub solver: SolverSettings,
+    pub range_check: RangeCheck,
+    /// End time [s].
+    pub t_end: f64,
+    /// Output step [s].
+    pub dt_out: f64,
+    /// Most output rows (and communication steps of an emulated host) a run may have.
+    pub max_rows: u64,
+}
+
+impl Default for Scene {
+    /// The defaults of [`SETTINGS`].
+    fn default() -> Self {
+        let mut scene = Scene {
+            params: Params::default(),
+            law: PaperLaw::default(),
+            initial: InitialState::default(),
+            formulation: Formulation::Reduced,
+            phi_source: PhiSource::Law,
+            phi_interpolation: Interpolation::Smooth,
+            phi_extrapolation: 3,
+            input_derivatives: false,
+            dt_comm: 0.01,
+            solver: SolverSettings {
+                rtol: 1e-6,
+                atol: 0.0,
+                max_order: 5,
+                fixed_step: 0.0,
+                fixed_order: 0,
+                stability_guard: true,
+            },
+            range_check: RangeCheck::Stop,
+            t_end: 10.0,
+            dt_out: 0.01,
+            max_rows: 1,
+        };
+        for s in &SETTINGS {
+            scene.put(s.key, s.default);
+        }
+        scene
+    }
+}
+
+/// Item `k` of `all`; the table's range check has made sure it exists.
+fn item<T: Copy>(all: &[T], k: usize) -> T {
+    all[k.min(all.len() - 1)]
+}
+
+fn position<T: PartialEq>(all: &[T], x: &T) -> usize {
+    all.iter().position(|a| a == x).expect("every item is listed")
+}
+
+impl Scene {
+    /// The value of a setting.
+    pub fn get(&self, key: Key) -> Value {
+        use Value::{Bool, Choice, Integer, Real};
+        let (p, s) = (&self.params, &self.solver);
+        match key {
+            Key::L => Real(p.l),
+            Key::Ei => Real(p.ei),
+            Key::M => Real(p.m),
+            Key::M2 => Real(p.m2),
+            Key::JC => Real(p.j_c),
+            Key::R => Real(p.r),
+            Key::G => Real(p.g),
+            Key::TRot => Real(self.law.t_rot),
+            Key::PhiEnd => Real(self.law.phi_end),
+            Key::Phi0 => Real(self.law.phi0),
+            Key::V10 => Real(self.initial.v1),
+            Key::Theta10 => Real(self.initial.theta1),
+            Key::Dv10 => Real(self.initial.dv1),
+            Key::Dtheta10 => Real(self.initial.dtheta1),
+            Key::Formulation => Choice(position(&Formulation::ALL, &self.formulation)),
+            Key::PhiSource => Choice(position(&PhiSource::ALL, &self.phi_source)),
+            Key::PhiInterpolation => Choice(position(&Interpolation::ALL, &self.phi_interpolation)),
+            Key::PhiExtrapolation => Integer(self.phi_extrapolation as i64),
+            Key::InputDerivatives => Bool(self.input_derivatives),
+            Key::DtComm => Real(self.dt_comm),
+            Key::Rtol => Real(s.rtol),
+            Key::Atol => Real(s.atol),
+            Key::MaxOrder => Integer(s.max_order as i64),
+            Key::FixedStep => Real(s.fixed_step),
+            Key::FixedOrder => Integer(s.fixed_order as i64),
+            Key::StabilityGuard => Bool(s.stability_guard),
+            Key::RangeCheck => Choice(position(&RangeCheck::ALL, &self.range_check)),
+            Key::TEnd => Real(self.t_end),
+            Key::DtOut => Real(self.dt_out),
+            Key::MaxRows => Integer(self.max_rows as i64),
+        }
+    }
+
+    /// Sets a setting after checking its value against the table; the error names the
+    /// setting and what it allows, and leaves the scene unchanged.
+    pub fn set(&mut self, key: Key, value: Value) -> Result<(), String> {
+        let value = Setting::of(key).check(value)?;
+        self.put(key, value);
+        Ok(())
+    }
+
+    /// Sets the setting called `name` from the text a user typed (`--set NAME=VALUE`).
+    pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), String> {
+        let setting = Setting::by_name(name)?;
+        let value = setting.parse(text)?;
+        self.set(setting.key, value)
+    }
+
+    /// Sets the real setting called `name` to `value` (a study's parameter).
+    pub fn set_number(&mut self, name: &str, value: f64) -> Result<(), String> {
+        let setting = Setting::by_name(name)?;
+        self.set(setting.key, Value::Real(value))
+    }
+
+    /// Stores a checked value.
+    fn put(&mut self, key: Key, value: Value) {
+        let real = |v: Value| match v {
+            Value::Real(x) => x,
+            _ => f64::NAN,
+        };
+        let int = |v: Value| match v {
+            Value::Integer(k) => k.max(0) as u64,
+            _ => 0,
+        };
+        let choice = |v: Value| match v {
+            Value::Choice(k) => k,
+            _ => 0,
+        };
+        let flag = |v: Value| matches!(v, Value::Bool(true));
+        let (p, s) = (&mut self.params, &mut self.solver);
+        match key {
+            Key::L => p.l = real(value),
+            Key::Ei => p.ei = real(value),
+            Key::M => p.m = real(value),
+            Key::M2 => p.m2 = real(value),
+            Key::JC => p.j_c = real(value),
+            Key::R => p.r = real(value),
+            Key::G => p.g = real(value),
+            Key::TRot => self.law.t_rot = real(value),
+            Key::PhiEnd => self.law.phi_end = real(value),
+            Key::Phi0 => self.law.phi0 = real(value),
+            Key::V10 => self.initial.v1 = real(value),
+            Key::Theta10 => self.initial.theta1 = real(value),
+            Key::Dv10 => self.initial.dv1 = real(value),
+            Key::Dtheta10 => self.initial.dtheta1 = real(value),
+            Key::Formulation => self.formulation = item(&Formulation::ALL, choice(value)),
+            Key::PhiSource => self.phi_source = item(&PhiSource::ALL, choice(value)),
+            Key::PhiInterpolation => {
+                self.phi_interpolation = item(&Interpolation::ALL, choice(value))
+            }
+            Key::PhiExtrapolation => self.phi_extrapolation = int(value) as usize,
+            Key::InputDerivatives => self.input_derivatives = flag(value),
+            Key::DtComm => self.dt_comm = real(value),
+            Key::Rtol => s.rtol = real(value),
+            Key::Atol => s.atol = real(value),
+            Key::MaxOrder => s.max_order = int(value) as usize,
+            Key::FixedStep => s.fixed_step = real(value),
+            Key::FixedOrder => s.fixed_order = int(value) as usize,
+            Key::StabilityGuard => s.stability_guard = flag(value),
+            Key::RangeCheck => self.range_check = item(&RangeCheck::ALL, choice(value)),
+            Key::TEnd => self.t_end = real(value),
+            Key::DtOut => self.dt_out = real(value),
+            Key::MaxRows => self.max_rows = int(value),
+        }
+    }
+
+    /// The integrator's configuration for a run of this scene.
+    pub fn solver_config(&self, max_steps: u64) -> BdfConfig {
+        self.solver.config(max_steps)
+    }
+
+    /// φ at t = 0 under the settings (the law's φ0 + its value there, or the host's start).
+    fn start_phi(&self) -> f64 {
+        self.law.eval(0.0).phi
+    }
+
+    /// The checks that need several settings at once, and the model: everything a run needs
+    /// before its first step, except the output grid ([`rows`](Self::rows)). The errors say
+    /// what is wrong in the settings' names.
+    pub fn check_model(&self, phi_at_start: f64) -> Result<BeamBody, String> {
+        let model = BeamBody::new(self.params).map_err(|e| e.to_string())?;
+        self.law.validate().map_err(|e| e.to_string())?;
+        let s = &self.solver;
+        if s.fixed_order != 0 && s.fixed_step == 0.0 {
+            return Err(format!(
+                "`fixed_order` = {} needs a constant step, `fixed_step` > 0; without one the \
+                 integrator is the adaptive BDF, whose highest order is `max_order`",
+                s.fixed_order
+            ));
+        }
+        let i = self.initial;
+        if self.range_check == RangeCheck::Stop {
+            let l = self.params.l;
+            if i.v1.abs() > l {
+                return Err(format!(
+                    "the initial state `v1_0` = {:?} is outside the range of validity |v1| <= l \
+                     = {l:?} (range_check = stop)",
+                    i.v1
+                ));
+            }
+            if i.theta1.abs() > std::f64::consts::FRAC_PI_2 {
+                return Err(format!(
+                    "the initial state `theta1_0` = {:?} is outside the range of validity \
+                     |theta1| <= pi/2 (range_check = stop)",
+                    i.theta1
+                ));
+            }
+        }
+        model.check_start(phi_at_start, i.v1, i.theta1)?;
+        Ok(model)
+    }
+
+    /// Checks everything a standalone run needs before its first step: the model, the
+    /// settings together and the number of rows.
+    pub fn validate(&self) -> Result<BeamBody, String> {
+        let model = self.check_model(self.start_phi())?;
+        self.rows()?;
+        if self.phi_source == PhiSource::Input {
+            count(self.dt_comm, self.t_end, self.max_rows, "dt_comm", "communication steps")?;
+        }
+        Ok(model)
+    }
+
+    /// The number of output rows, t = k·dt_out up to and including t_end; an error when it
+    /// exceeds `max_rows`, computed without overflow whatever the numbers.
+    pub fn rows(&self) -> Result<u64, String> {
+        count(self.dt_out, self.t_end, self.max_rows, "dt_out", "output rows")
+    }
+
+    /// The output times k·dt_out, k = 0, 1, …, ending exactly at t_end (a last, shorter
+    /// interval if t_end is not a multiple of dt_out). Check [`rows`](Self::rows) first.
+    pub fn output_times(&self) -> impl Iterator<Item = f64> {
+        grid(self.dt_out, self.t_end)
+    }
+}
+
+/// The number of points of [`grid`] (step, t_end), refused above `limit` with a message that
+/// names the step's setting.
+fn count(step: f64, t_end: f64, limit: u64, name: &str, what: &str) -> Result<u64, String> {
+    let ratio = t_end / step;
+    // Compared as doubles first: a ratio of 1e300 must not reach an integer conversion.
+    if ratio.partial_cmp(&(limit as f64)) != Some(std::cmp::Ordering::Less) {
+        return Err(format!(
+            "t_end = {t_end:?} with `{name}` = {step:?} makes {ratio:.3e} {what}, more than \
+             `max_rows` = {limit}: raise `{name}`, shorten t_end, or raise `max_rows` \
+             (--max-rows) if you mean it"
+        ));
+    }
+    let n = grid_len(step, t_end);
+    if n > limit {
+        return Err(format!(
+            "t_end = {t_end:?} with `{name}` = {step:?} makes {n} {what}, more than `max_rows` \
+             = {limit}: raise `{name}`, shorten t_end, or raise `max_rows` (--max-rows)"
+        ));
+    }
+    Ok(n)
+}
+
+/// The index of the last point of [`grid`], and whether t_end is one of the k·step.
+fn grid_last(step: f64, t_end: f64) -> u64 {
+    let ratio = t_end / step;
+    let n = (ratio + 1e-9).floor() as u64;
+    let exact = (ratio - n as f64).abs() <= 1e-9 * ratio.max(1.0);
+    if exact {
+        n
+    } else {
+        n + 1
+    }
+}
+
+/// The number of points of [`grid`].
+fn grid_len(step: f64, t_end: f64) -> u64 {
+    grid_last(step, t_end) + 1
+}
+
+/// The times k·`step`, k = 0, 1, …, ending exactly at `t_end` (a last, shorter interval if
+/// `t_end` is not a multiple of `step`). For ratios t_end/step that [`count`] accepts.
+pub(crate) fn grid(step: f64, t_end: f64) -> impl Iterator<Item = f64> {
+    let last = grid_last(step, t_end);
+    (0..=last).map(move |k| if k == last { t_end } else { k as f64 * step })
+}
+
+#[cfg(feature = "cli")]
+mod file;
+#[cfg(feature = "cli")]
+pub use file::{locate, syntax_error, toml_value};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_tables_and_the_models() {
+        let s = Scene::default();
+        for setting in &SETTINGS {
+            assert_eq!(s.get(setting.key), setting.default, "{}", setting.name);
+        }
+        assert_eq!(s.params, Params::default());
+        assert_eq!(s.law, PaperLaw::default());
+        assert_eq!(s.solver.config(10_000_000), BdfConfig::default());
+    }
+
+    #[test]
+    fn every_setting_round_trips_and_a_refused_value_changes_nothing() {
+        for setting in &SETTINGS {
+            let mut s = Scene::default();
+            s.set(setting.key, setting.default).unwrap();
+            assert_eq!(s, Scene::default(), "{}", setting.name);
+            if let Value::Real(_) = setting.default {
+                assert!(s.set(setting.key, Value::Real(f64::NAN)).is_err(), "{}", setting.name);
+                assert_eq!(s, Scene::default(), "{}", setting.name);
+            }
+        }
+    }
+
+    #[test]
+    fn output_grid_is_exact_and_ends_at_t_end() {
+        let scene = Scene { t_end: 10.2, dt_out: 0.0085, ..Scene::default() };
+        let times: Vec<f64> = scene.output_times().collect();
+        assert_eq!((times.len() as u64, scene.rows()), (1201, Ok(1201)));
+        assert_eq!(times[0], 0.0);
+        assert_eq!(times[7], 7.0 * 0.0085);
+        assert_eq!(*times.last().unwrap(), 10.2);
+        let uneven = Scene { t_end: 1.05, dt_out: 0.1, ..Scene::default() };
+        let times: Vec<f64> = uneven.output_times().collect();
+        assert_eq!((times.len() as u64, uneven.rows()), (12, Ok(12)));
+        assert_eq!(times[10], 1.0);
+        assert_eq!(times[11], 1.05);
+    }
+
+    #[test]
+    fn absurd_row_counts_are_refused_not_wrapped() {
+        for dt_out in [1e-300, 1e-20, 1e-19, 1e-17, 1e-6] {
+            let s = Scene { t_end: 10.2, dt_out, ..Scene::default() };
+            let e = s.rows().unwrap_err();
+            assert!(e.contains("`dt_out`") && e.contains("max_rows"), "{e}");
+            assert!(s.validate().is_err());
+        }
+        let s = Scene { t_end: 1e9, ..Scene::default() };
+        assert!(s.rows().unwrap_err().contains("1.000e11 output rows"));
+        // At the limit exactly: a million rows pass, one more does not.
+        let s = Scene { t_end: 999_999.0, dt_out: 1.0, ..Scene::default() };
+        assert_eq!(s.rows(), Ok(1_000_000));
+        let s = Scene { t_end: 1_000_000.0, dt_out: 1.0, ..Scene::default() };
+        assert!(s.rows().is_err());
+        let s = Scene {
+            t_end: 10.2,
+            dt_comm: 1e-300,
+            phi_source: PhiSource::Input,
+            ..Scene::default()
+        };
+        assert!(s.validate().unwrap_err().contains("communication steps"));
+    }
+
+    #[test]
+    fn settings_checked_together_say_what_is_wrong() {
+        let mut s = Scene::default();
+        s.set_text("fixed_order", "3").unwrap();
+        let e = s.validate().unwrap_err();
+        assert!(e.starts_with("`fixed_order` = 3 needs a constant step, `fixed_step` > 0"), "{e}");
+        s.set_text("fixed_step", "1e-3").unwrap();
+        assert!(s.validate().is_ok());
+        let mut s = Scene::default();
+        s.set_text("v1_0", "3").unwrap();
+        let e = s.validate().unwrap_err();
+        assert!(e.contains("`v1_0` = 3.0 is outside the range of validity |v1| <= l"), "{e}");
+        s.set_text("range_check", "off").unwrap();
+        assert!(s.validate().is_ok());
+        let mut s = Scene::default();
+        for (k, v) in [("m", "0"), ("J_C", "0"), ("r", "0")] {
+            s.set_text(k, v).unwrap();
+        }
+        let e = s.validate().unwrap_err();
+        assert!(e.contains("singular at the start") && e.contains("J_C = 0.0"), "{e}");
+    }
+
+    #[test]
+    fn set_text_names_unknown_settings_and_bad_values() {
+        let mut s = Scene::default();
+        s.set_text("EI", "2000").unwrap();
+        assert_eq!(s.params.ei, 2000.0);
+        let e = s.set_text("beam", "exact").unwrap_err();
+        assert!(e.starts_with("unknown setting `beam`: must be one of l, EI,"), "{e}");
+        let e = s.set_text("EI", "-1").unwrap_err();
+        assert!(e.contains("`EI` = -1.0 is out of range: must be positive"), "{e}");
+        assert!(s.set_text("dt_out", "0").is_err());
+        assert!(s.set_text("formulation", "dae_stabilized").is_ok());
+        assert_eq!(s.formulation, Formulation::DaeStabilized);
+        assert!(s.set_text("formulation", "quantum").is_err());
+        assert!(s.set_text("max_order", "6").is_err());
+        assert!(s.set_text("stability_guard", "no").is_err());
+    }
+}
