@@ -165,6 +165,8 @@ pub struct Setting {
     pub default: Value,
     pub description: &'static str,
     pub appears: Appears,
+    /// The FMU's start value where it differs from `default` (only `phi_source`).
+    pub fmu_start: Option<Value>,
 }
 
 impl Setting {
@@ -255,6 +257,14 @@ impl Setting {
         self.check(value)
     }
 
+    /// The FMU's start value.
+    pub const fn fmu_default(&self) -> Value {
+        match self.fmu_start {
+            Some(v) => v,
+            None => self.default,
+        }
+    }
+
     /// The row of `key`.
     pub const fn of(key: Key) -> &'static Setting {
         &SETTINGS[key as usize]
@@ -303,7 +313,7 @@ const fn row(
     description: &'static str,
     appears: Appears,
 ) -> Setting {
-    Setting { key, name, kind, range, default, description, appears }
+    Setting { key, name, kind, range, default, description, appears, fmu_start: None }
 }
 
 use Key as K;
@@ -392,16 +402,23 @@ pub const SETTINGS: [Setting; 30] = [
         "Equations integrated: reduced (15), dae (20-21), dae_stabilized, linear (16)",
         flag(true, "--formulation"),
     ),
-    row(
-        K::PhiSource,
-        "phi_source",
-        Kind::Choice(&PHI_SOURCE_TYPE),
-        Finite,
-        Choice(1),
-        "Source of the hinge angle: the paper's law (the default), or the input phi (the CLI \
-         feeds the law's samples as a host would, every dt_comm)",
-        FMU,
-    ),
+    // The CLI runs the paper's law unless told otherwise; the FMU takes phi from its input,
+    // because some hosts (libcosim, Ecos) cannot set an enumeration, and every host must be
+    // able to drive phi. An FMU whose input is never set says so at its first step.
+    Setting {
+        fmu_start: Some(Choice(0)),
+        ..row(
+            K::PhiSource,
+            "phi_source",
+            Kind::Choice(&PHI_SOURCE_TYPE),
+            Finite,
+            Choice(1),
+            "Source of the hinge angle: the input phi (the FMU's default), or the paper's law \
+             (the CLI's default; the CLI's input is the law sampled as a host would, every \
+             dt_comm)",
+            FMU,
+        )
+    },
     row(
         K::PhiInterpolation,
         "phi_interpolation",
@@ -539,6 +556,7 @@ mod tests {
             assert_eq!(s.key as usize, k, "{}", s.name);
             assert_eq!(SETTINGS.iter().filter(|t| t.name == s.name).count(), 1, "{}", s.name);
             assert_eq!(s.check(s.default), Ok(s.default), "{}", s.name);
+            assert_eq!(s.check(s.fmu_default()), Ok(s.fmu_default()), "{}", s.name);
             assert!(!s.description.is_empty(), "{}", s.name);
         }
     }

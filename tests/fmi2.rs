@@ -313,6 +313,9 @@ fn instantiate_accepts_every_visible_and_logging_on_value() {
                 assert_eq!(setup_traced, traced, "{what}: {records:#?}");
                 h.expect_ok(h.enter());
                 h.expect_ok(h.exit());
+                let st = h.set_real(Var::Phi, 0.0);
+                h.take();
+                assert_eq!(st, OK, "{what}");
                 h.expect_ok(h.step(0.0, 0.01));
             }
         }
@@ -1972,6 +1975,7 @@ fn logging_is_silent_when_off_and_errors_always_go_out() {
     h.expect_error(st, &["fmi2SetDebugLogging", "unknown log category"]);
     // ... and a refused call changed nothing: still silent.
     h.initialize();
+    h.expect_ok(h.set_real(Var::Phi, 0.0));
     h.expect_ok(h.step(0.0, 0.01));
     assert!(h.take().is_empty());
 
@@ -2222,7 +2226,7 @@ fn reset_returns_to_the_start_values() {
         assert_eq!(h.real(var).to_bits(), table_real(var).to_bits(), "{var:?}");
     }
     let (st, ints) = h.get_integers(&INT_PARAMS.map(vr));
-    assert_eq!((st, ints), (OK, vec![1, 2, 5, 0, 3]));
+    assert_eq!((st, ints), (OK, vec![1, 1, 5, 0, 3]));
     assert_eq!(h.get_booleans(&[vr(Var::StabilityGuard)]), (OK, vec![fmi2True]));
     // At rest.
     assert_eq!(h.real(Var::V1), 0.0);
@@ -2376,16 +2380,25 @@ fn steps_whose_input_cannot_be_extrapolated_are_discarded_not_fatal() {
 
 // ===== 17. what a host sees first =================================================================
 
-/// With no start values the FMU runs the paper's scene: the law turns the body by pi in
-/// t_rot, so the outputs move (a host that sets nothing does not get rows of zeros).
+/// With no start values, phi is the input at its start value 0: a host that steps without
+/// ever setting it (FMPy's simulate_fmu without an input) is told so at the first step, once,
+/// with fmi2Warning and logging off; the run goes on, the body at rest.
 #[test]
-fn the_default_is_the_paper_s_turn() {
+fn an_input_never_set_is_a_warning_at_the_first_step() {
     let _g = shared();
-    let h = Host::plain("default");
+    let h = Host::plain("never set");
     h.initialize();
-    h.steps(0.0, 0.0085, 100);
-    assert!((h.real(Var::PhiApplied) - std::f64::consts::PI).abs() < 1e-12);
-    assert!(h.real(Var::V1).abs() > 1e-2, "the beam vibrates after the turn");
+    let s = h.step(0.0, 0.01);
+    let r =
+        h.expect_status(s, WARNING, &["input `phi` has not been set", "`phi_source` = law (2)"]);
+    assert_eq!(r.category, "logStatusWarning");
+    h.steps(0.01, 0.01, 3);
+    assert_eq!(h.real(Var::V1), 0.0);
+    // A host that sets phi, even to its start value, is not warned.
+    let g = Host::plain("set");
+    g.initialize();
+    g.expect_ok(g.set_real(Var::Phi, 0.0));
+    g.expect_ok(g.step(0.0, 0.01));
 }
 
 /// A host that sends phi between steps while the law drives the body is told, once, with
@@ -2395,6 +2408,7 @@ fn the_default_is_the_paper_s_turn() {
 fn phi_sent_to_the_law_is_a_warning_once() {
     let _g = shared();
     let h = Host::plain("ignored phi");
+    h.expect_ok(h.set_integer(Var::PhiSource, 2));
     h.expect_ok(h.set_real(Var::Phi, 0.0));
     h.initialize();
     let s = h.set_real(Var::Phi, 0.5);
@@ -2412,6 +2426,7 @@ fn phi_sent_to_the_law_is_a_warning_once() {
 fn warnings_reach_a_host_with_logging_off() {
     let _g = shared();
     let h = Host::plain("warn");
+    h.expect_ok(h.set_integer(Var::PhiSource, 2));
     h.expect_ok(h.set_integer(Var::RangeCheck, 2));
     h.expect_ok(h.set_real(Var::PhiEnd, 1000.0));
     h.initialize();
@@ -2452,6 +2467,7 @@ fn fixed_order_without_fixed_step_is_refused_naming_both() {
 fn the_initial_state_and_phi0_are_parameters() {
     let _g = shared();
     let h = Host::plain("initial");
+    h.expect_ok(h.set_integer(Var::PhiSource, 2));
     h.expect_ok(h.set_real(Var::V10, 0.1));
     h.expect_ok(h.set_real(Var::Dtheta10, -0.2));
     h.expect_ok(h.set_real(Var::Phi0, 0.3));

@@ -72,9 +72,13 @@ fn from_fmi(setting: &Setting, value: Value) -> Result<settings::Value, String> 
 }
 
 impl Values {
-    /// The start values: the settings table's defaults, and φ = 0.
+    /// The start values: the settings table's (the FMU's where they differ), and φ = 0.
     pub(super) fn from_table() -> Values {
-        Values { settings: Scene::default(), phi: 0.0 }
+        let mut settings = Scene::default();
+        for s in settings::SETTINGS.iter().filter(|s| s.fmu_start.is_some()) {
+            settings.set(s.key, s.fmu_default()).expect("the table's start values are in range");
+        }
+        Values { settings, phi: 0.0 }
     }
 
     /// Sets the input `phi`, which must be finite.

@@ -87,8 +87,20 @@ pub struct Instance {
     log: Logger,
     logging: LogFlags,
     core: Core,
-    /// Whether the host has been told, once, that its φ is ignored (`phi_source = law`).
-    told_phi_ignored: bool,
+    /// What the host has done with φ, and been told of it (once each): see
+    /// [`phi_used`](Self::phi_used) and [`check_phi_sent`](Self::check_phi_sent).
+    phi: PhiNotes,
+}
+
+/// The host's use of the input φ, for the warnings that say what a run really does.
+#[derive(Clone, Copy, Debug, Default)]
+struct PhiNotes {
+    /// The host has set φ since instantiation or reset.
+    set: bool,
+    /// Told that φ is ignored (`phi_source` = law).
+    told_ignored: bool,
+    /// Told that φ was never set (`phi_source` = input).
+    told_unset: bool,
 }
 
 impl fmt::Debug for Instance {
@@ -183,7 +195,7 @@ impl Instance {
             log,
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
             core: Core::new(),
-            told_phi_ignored: false,
+            phi: PhiNotes::default(),
         };
         inst.trace(format_args!("fmi2Instantiate: instance `{name}`"));
         Some(inst)
@@ -418,6 +430,7 @@ impl Instance {
     pub fn reset(&mut self) -> Status {
         let r = self.allowed("fmi2Reset", mask::ANY_BUT_FATAL).map(|()| {
             self.core = Core::new();
+            self.phi = PhiNotes::default();
             trace!(self, "fmi2Reset: back to `instantiated` with the start values");
             Status::Ok
         });
@@ -657,11 +670,12 @@ impl Instance {
     /// used. A host that sends φ between steps is driving it, and is told so once, with
     /// fmi2Warning (a host that sets every input's start value before the run is not).
     fn phi_used(&mut self, func: &str) -> Status {
+        self.phi.set = true;
         let law = self.core.values.settings.phi_source == PhiSource::Law;
-        if !law || self.core.state != State::StepComplete || self.told_phi_ignored {
+        if !law || self.core.state != State::StepComplete || self.phi.told_ignored {
             return Status::Ok;
         }
-        self.told_phi_ignored = true;
+        self.phi.told_ignored = true;
         self.log(
             Status::Warning,
             &format!(
@@ -854,6 +868,7 @@ impl Instance {
             }
         }
         trace!(self, "{F}: tc = {tc}, h = {h}");
+        let told = self.check_phi_sent(F);
         let sample = self.core.sample(tc);
         self.core.pending = [None, None];
         self.core.cache = OutputCache::default();
@@ -877,7 +892,29 @@ impl Instance {
             self.log(Status::Warning, &format!("{F}: {warning}"));
             return Ok(Status::Warning);
         }
-        Ok(Status::Ok)
+        Ok(told)
+    }
+
+    /// Before a step with `phi_source` = input: a host that has never set φ runs the model
+    /// at φ's start value, the body never turning, which is rarely what it means (FMPy's
+    /// `simulate_fmu` without an input does so). It is told once, with fmi2Warning.
+    fn check_phi_sent(&mut self, func: &str) -> Status {
+        let input = self.core.values.settings.phi_source == PhiSource::Input;
+        if !input || self.phi.set || self.phi.told_unset {
+            return Status::Ok;
+        }
+        self.phi.told_unset = true;
+        let phi = self.core.values.phi;
+        self.log(
+            Status::Warning,
+            &format!(
+                "{func}: the input `phi` has not been set, so it stays at {phi:?} rad and the \
+                 body does not turn; set `phi` at every communication point, or set \
+                 `phi_source` = law ({}) for the paper's turn (said once)",
+                PhiSource::Law as i32 + 1
+            ),
+        );
+        Status::Warning
     }
 
     /// fmi2CancelStep: steps are synchronous, so there is never one to cancel.

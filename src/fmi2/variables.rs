@@ -250,7 +250,7 @@ impl Variable {
 /// the table's. Enumerations are 1-based.
 const fn param(var: Var, key: Key) -> Variable {
     let s = Setting::of(key);
-    let ty = match (s.kind, s.default) {
+    let ty = match (s.kind, s.fmu_default()) {
         (Kind::Real { unit }, Value::Real(start)) => {
             Type::Real { unit, start: Some(start), min: s.range.min(), max: s.range.max() }
         }

@@ -192,11 +192,11 @@ pub fn guid_c() -> CString {
 }
 
 impl Host {
-    /// An instance that takes phi from the host (`phi_source` = input), as most tests drive
-    /// it.
+    /// An instance that takes phi from the host (`phi_source` = input, the start value), with
+    /// phi set to 0 before the run, as most tests drive it.
     pub fn new(name: &str) -> Host {
         let h = Host::with_logging(name, false);
-        assert_eq!(h.set_integer(Var::PhiSource, 1), OK);
+        assert_eq!(h.set_real(Var::Phi, 0.0), OK);
         h.log.take();
         h
     }
@@ -222,7 +222,7 @@ impl Host {
         Host { c, name: name.to_string(), log, callbacks }
     }
 
-    /// An instance as instantiated, with the table's start values (`phi_source` = law).
+    /// An instance as instantiated, with the table's start values and nothing set.
     pub fn plain(name: &str) -> Host {
         Host::with_logging(name, false)
     }

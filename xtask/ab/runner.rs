@@ -14,7 +14,7 @@
 #![allow(clippy::disallowed_methods)]
 
 use beam_body::model::Formulation;
-use beam_body::sim::{scene_entries, Run, Scene};
+use beam_body::sim::{Run, Scene};
 use std::time::Instant;
 
 /// (label, scene file, formulation, rtol).
@@ -34,14 +34,43 @@ const CASES: [(&str, &str, Formulation, f64); 10] = [
 fn scene(file: &str, formulation: Formulation, rtol: f64) -> Scene {
     let path = format!("{}/scenes/{file}", env!("BEAM_BODY_ROOT"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let mut s = Scene::default();
-    for (_, key, value) in scene_entries(&text).expect("a valid scene") {
-        s.set(&key, &value).expect("a valid scene key");
-    }
+    let mut s = read_scene(&text);
     s.formulation = formulation;
     s.solver.rtol = rtol;
+    s
+}
+
+/// The scene of a file's text, the default absolute tolerance (1e-3·rtol), and the run at
+/// t = 0: through the settings table's API ...
+#[cfg(feature = "settings")]
+fn read_scene(text: &str) -> Scene {
+    let mut s = Scene::from_toml(text).expect("a valid scene");
+    s.solver.atol = 0.0;
+    s
+}
+
+#[cfg(feature = "settings")]
+fn start(s: &Scene) -> Run {
+    let max_steps = beam_body::solver::BdfConfig::default().max_steps;
+    s.validate().expect("a valid scene");
+    Run::start(s, 0.0, beam_body::model::Sample::value(0.0, 0.0), max_steps).expect("a valid run")
+}
+
+/// ... or through the API before it (revisions up to 6bbfb30).
+#[cfg(not(feature = "settings"))]
+fn read_scene(text: &str) -> Scene {
+    let mut s = Scene::default();
+    for (_, key, value) in beam_body::sim::scene_entries(text).expect("a valid scene") {
+        s.set(&key, &value).expect("a valid scene key");
+    }
     s.solver.atol = None;
     s
+}
+
+#[cfg(not(feature = "settings"))]
+fn start(s: &Scene) -> Run {
+    let model = s.validate().expect("a valid scene");
+    Run::with_law(model, s.formulation, &s.solver, 0.0, s.initial, s.law).expect("a valid run")
 }
 
 fn grid(s: &Scene) -> Vec<f64> {
@@ -52,9 +81,7 @@ fn grid(s: &Scene) -> Vec<f64> {
 /// One solve with the states on the grid; the accepted steps.
 fn solve(s: &Scene, grid: &[f64], out: &mut Vec<f64>) -> u64 {
     out.clear();
-    let model = s.validate().expect("a valid scene");
-    let mut run = Run::with_law(model, s.formulation, &s.solver, 0.0, s.initial, s.law)
-        .expect("a valid run");
+    let mut run = start(s);
     let mut y = [0.0; 6];
     run.step_to_sampling(s.t_end, grid.iter().copied(), |run, t| {
         let n = run.state_at(t, &mut y)?;
@@ -96,7 +123,7 @@ fn sample(args: &[String]) {
     };
     let formulation = match formulation.as_str() {
         "dae" => Formulation::Dae,
-        "dae_stabilized" => Formulation::DaeStabilized,
+        "dae_stabilized" | "dae-stabilized" => Formulation::DaeStabilized,
         "linear" => Formulation::Linear,
         _ => Formulation::Reduced,
     };

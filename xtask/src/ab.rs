@@ -104,10 +104,19 @@ fn build(dir: &Path, name: &str, library: &Path) -> Result<PathBuf> {
     let crate_dir = dir.join(name);
     std::fs::create_dir_all(&crate_dir)
         .map_err(|e| format!("cannot create {}: {e}", relative(&crate_dir)))?;
+    // A library with the settings table (src/settings.rs) reads scene files with the feature
+    // `cli`; the runner's feature `settings` picks the matching calls (runner.rs).
+    let settings = library.join("src").join("settings.rs").exists();
+    let (features, runner_features) = if settings {
+        (", features = [\"cli\"]", "[features]\ndefault = [\"settings\"]\nsettings = []\n\n")
+    } else {
+        ("", "[features]\nsettings = []\n\n")
+    };
     let manifest = format!(
         "# Written by `cargo xtask bench-ab`.\n[package]\nname = \"{name}\"\nversion = \"0.0.0\"\n\
-         edition = \"2021\"\npublish = false\n\n[[bin]]\nname = \"{name}\"\npath = \"{}\"\n\n\
-         [dependencies]\nbeam-body = {{ path = \"{}\", default-features = false }}\n\
+         edition = \"2021\"\npublish = false\n\n{runner_features}[[bin]]\nname = \"{name}\"\n\
+         path = \"{}\"\n\n[dependencies]\n\
+         beam-body = {{ path = \"{}\", default-features = false{features} }}\n\
          libc = \"0.2\"\n\n[profile.release]\nlto = \"fat\"\ncodegen-units = 4\n\
          panic = \"unwind\"\ndebug = \"line-tables-only\"\n\n[workspace]\n",
         root.join("xtask").join("ab").join("runner.rs").display(),
