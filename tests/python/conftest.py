@@ -17,7 +17,7 @@ TARGET = REPO / "target"
 CACHE_DIR = TARGET / "oracle-cache"
 REPORT_FILE = TARGET / "oracle-report.txt"
 PAPER_SCENE = REPO / "scenes" / "paper.toml"
-FORMULATIONS = ("reduced", "dae", "dae-stabilized", "linear")
+FORMULATIONS = ("reduced", "dae", "dae_stabilized", "linear")
 
 
 def binary_path() -> Path:
@@ -52,11 +52,15 @@ def run_cli(binary: Path, args, stdin_text: str | None = None, timeout: float = 
 
 
 #: The columns of the CLI's CSV output, in order.
-COLUMNS = "t,v1,theta1,u2,dv1,dtheta1,du2,phi,dphi,ddphi,N,P,M,energy,drift".split(",")
+#: The CLI's CSV columns, and their headers as the CSV writes them (`name [unit]`, the FMU's
+#: names and units of the same outputs).
+COLUMNS = "t,v1,theta1,u2,dv1,dtheta1,du2,phi_applied,dphi_applied,ddphi_applied,N,P,M,energy,drift".split(",")
+UNITS = "s,m,rad,m,m/s,rad/s,m/s,rad,rad/s,rad/s2,N,N,N.m,J,m".split(",")
+HEADER = [f"{c} [{u}]" for c, u in zip(COLUMNS, UNITS)]
 
 
 def read_csv(text: str) -> dict:
-    """The CLI's CSV output as {column: numpy array}; checks the header."""
+    """The CLI's CSV output as {column name without its unit: numpy array}; checks the header."""
     import csv
     import io
 
@@ -65,7 +69,7 @@ def read_csv(text: str) -> dict:
     rows = list(csv.reader(io.StringIO(text)))
     assert rows, "empty CSV"
     header = [h.strip() for h in rows[0]]
-    assert header == COLUMNS, f"CSV header {header} != {COLUMNS}"
+    assert header == HEADER, f"CSV header {header} != {HEADER}"
     data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)
     assert data.ndim == 2 and data.shape[1] == len(COLUMNS)
     return {c: data[:, i] for i, c in enumerate(COLUMNS)}

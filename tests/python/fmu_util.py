@@ -43,7 +43,7 @@ T_END = 10.2
 H0 = 0.0085
 
 # Enumerations of the modelDescription (src/fmi2/variables.rs).
-FORMULATION_ENUM = {"reduced": 1, "dae": 2, "dae-stabilized": 3, "linear": 4}
+FORMULATION_ENUM = {"reduced": 1, "dae": 2, "dae_stabilized": 3, "linear": 4}
 PHI_SOURCE_LAW = 2  # phi_source: 1 = input (the default), 2 = law
 
 # fmi2StatusKind
@@ -121,11 +121,11 @@ def cli(binary: Path, **sets) -> dict:
 def cli_law(binary: Path, h: float):
     """The law exactly as the model evaluates it (its own sin and cos), sampled by the CLI on the grid
     k*h: a function of those times only, (phi, dphi, ddphi) at t = k*h. The CLI's CSV round-trips every
-    value, and its feeds (phi_feed = values | derivatives) sample the same law at the same points. From
+    value, and its host feed (phi_source = input, with or without input_derivatives) sample the same law at the same points. From
     t_rot on, the law is the hold piece (phi_end, 0, 0) (the piece that starts at t, as law()), with no
     sine to evaluate; an output row at exactly t_rot shows the turn's one-sided values instead."""
     c = cli(binary, dt_out=h)
-    rows = np.c_[c["phi"], c["dphi"], c["ddphi"]]
+    rows = np.c_[c["phi_applied"], c["dphi_applied"], c["ddphi_applied"]]
 
     def at(t: float):
         k = int(round(t / h))

@@ -2,7 +2,7 @@
 and values with derivatives through fmpy.fmi2.FMU2Slave (FMPy 0.3.32's set_input_derivatives is broken).
 
 Two kinds of check:
-- against the CLI fed the same way (`--set phi_feed=values|derivatives --set dt_comm=H`): the FMU and the
+- against the CLI fed the same way (`--set phi_source=input [--set input_derivatives=true] --set dt_comm=H`): the FMU and the
   standalone solver reconstruct phi over a step with the same code, so they must agree to rounding;
 - against the exact law (the CLI with the law itself at rtol 1e-12): the error of the reconstruction, its
   convergence in the communication step H and its observed order log2(e(H)/e(H/2)).
@@ -63,7 +63,7 @@ MIN_ORDER_VALUES = 1.5
 # The values feed avoids that with a C1 Hermite piece per step, src/model/signal.rs.)
 # degree 0 is not expected to converge (the Hermite step's target slope is 0: O(1) error in phi'), but it
 # must stay bounded: measured max error 4.3e-2 m at H0; bound 0.1 m (max |v1| is 0.59 m). Measured with
-# the CLI (phi_feed=values, phi_extrapolation=0) at smaller H: 7.2e-3 (H0/8), 4.9e-3, 4.1e-3, 3.7e-3
+# the CLI (phi_source=input, phi_extrapolation=0) at smaller H: 7.2e-3 (H0/8), 4.9e-3, 4.1e-3, 3.7e-3
 # (H0/64): an error floor, not convergence.
 DEGREE0_MAX_ERR = 0.1
 # After the turn phi is constant and every reconstruction is exact, so the error on [2, 10.2] is the error
@@ -134,12 +134,12 @@ def test_law_samples_are_the_clis(beam_body, fmu_report):
 
 @pytest.mark.parametrize("k", range(HALVINGS))
 def test_values_input_matches_cli_same_feed(fmu_unzipdir, beam_body, fmu_report, k):
-    """(a) values only, communication step H: the FMU equals the CLI with phi_feed=values, dt_comm=H."""
+    """(a) values only, communication step H: the FMU equals the CLI with phi_source=input, dt_comm=H."""
     h = HS[k]
     r = simulate_values(fmu_unzipdir, beam_body, h)
     assert len(r) == int(round(T_END / h)) + 1, f"simulate_fmu stopped early at t = {r['time'][-1]}"
     rows = on_paper_grid(r, h)
-    c = cli(beam_body, rtol=RTOL, phi_feed="values", dt_comm=h)
+    c = cli(beam_body, rtol=RTOL, phi_source="input", dt_comm=h)
     d = {q: float(np.max(np.abs(rows[q] - c[q]))) for q in STATES}
     d_inner = max(float(np.max(np.abs(rows[q][:-1] - c[q][:-1]))) for q in STATES)
     fmu_report.figure(f"values H={h:g}", "max|FMU-CLI(values)|", max(d.values()), f"all but the last row: {d_inner:.1e}")
@@ -199,9 +199,9 @@ def run_slave_derivatives(fmu_unzipdir, md, beam_body, h, name):
 @pytest.mark.parametrize("h", HS[:3] + [1e-3])
 def test_derivatives_input_matches_cli_same_feed(fmu_unzipdir, fmu_model_description, beam_body, fmu_report, h):
     """FMU2Slave: setReal(phi), setRealInputDerivatives orders 1 and 2 (the law's), doStep(tc, H), against
-    the CLI with phi_feed=derivatives, dt_comm=H, rtol 1e-10."""
+    the CLI with phi_source=input, input_derivatives=true, dt_comm=H, rtol 1e-10."""
     times, y = run_slave_derivatives(fmu_unzipdir, fmu_model_description, beam_body, h, f"derivatives-{h:g}")
-    c = cli(beam_body, rtol=RTOL, phi_feed="derivatives", dt_comm=h, dt_out=h)
+    c = cli(beam_body, rtol=RTOL, phi_source="input", input_derivatives="true", dt_comm=h, dt_out=h)
     assert len(c["t"]) == len(times) and np.max(np.abs(c["t"] - times)) <= 1e-12
     d = {q: float(np.max(np.abs(y[:, i] - c[q][1:]))) for i, q in enumerate(STATES)}
     fmu_report.figure(f"derivatives H={h:g}", "max|FMU-CLI(derivatives)|", max(d.values()))

@@ -358,16 +358,27 @@ fn step(instance: &mut InstanceCS, tc: f64, h: f64) -> Result {
     }
 }
 
+/// The FMU's rows in the CLI's CSV form (beam_body::csv): headers with units, numbers that
+/// read back exactly.
 fn write_csv(path: &Path, rows: &[[f64; 4]]) -> Result {
-    let mut text = String::from("t");
+    use beam_body::fmi2::variables::Type;
+    let mut text = beam_body::csv::header("t", Some("s"));
     for var in RECORDED {
+        let unit = match var.info().ty {
+            Type::Real { unit, .. } => unit,
+            _ => None,
+        };
         text.push(',');
-        text.push_str(var.info().name);
+        text.push_str(&beam_body::csv::header(var.info().name, unit));
     }
     text.push('\n');
     for row in rows {
-        let fields: Vec<String> = row.iter().map(|x| format!("{x:e}")).collect();
-        text.push_str(&fields.join(","));
+        for (k, x) in row.iter().enumerate() {
+            if k > 0 {
+                text.push(',');
+            }
+            beam_body::csv::push_number(&mut text, *x);
+        }
         text.push('\n');
     }
     crate::write_text(path, &text)

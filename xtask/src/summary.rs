@@ -28,7 +28,9 @@ impl Table {
             .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'));
 
         let (_, header) = lines.next().ok_or_else(|| format!("{name} is empty"))?;
-        let columns: Vec<String> = header.split(',').map(|c| c.trim().to_owned()).collect();
+        // A header names its unit, `v1 [m]`; the columns go by name.
+        let name_of = |c: &str| c.trim().split(" [").next().unwrap_or_default().to_owned();
+        let columns: Vec<String> = header.split(',').map(name_of).collect();
         let mut rows = Vec::new();
         for (number, line) in lines {
             let row = line
@@ -120,7 +122,7 @@ mod tests {
 
     #[test]
     fn parses_and_reports_bad_lines() {
-        let table = Table::parse("a.csv", "# comment\nt, v1\n0, 1\n\n0.5, -2e-3\n").unwrap();
+        let table = Table::parse("a.csv", "# comment\nt [s], v1\n0, 1\n\n0.5, -2e-3\n").unwrap();
         assert_eq!(table.columns, ["t", "v1"]);
         assert_eq!(table.rows, [[0.0, 1.0], [0.5, -2e-3]]);
 
