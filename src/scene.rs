@@ -317,25 +317,22 @@ impl Scene {
 }
 
 /// The number of points of [`grid`] (step, t_end), refused above `limit` with a message that
-/// names the step's setting.
+/// names the step's setting. Counted exactly where the count fits a double's integers, and
+/// compared as a double where it does not: no conversion saturates or wraps.
 fn count(step: f64, t_end: f64, limit: u64, name: &str, what: &str) -> Result<u64, String> {
     let ratio = t_end / step;
-    // Compared as doubles first: a ratio of 1e300 must not reach an integer conversion.
-    if ratio.partial_cmp(&(limit as f64)) != Some(std::cmp::Ordering::Less) {
-        return Err(format!(
-            "t_end = {t_end:?} with `{name}` = {step:?} makes {ratio:.3e} {what}, more than \
-             `max_rows` = {limit}: raise `{name}`, shorten t_end, or raise `max_rows` \
-             (--max-rows) if you mean it"
-        ));
+    let n = (ratio < 9.0e15).then(|| grid_len(step, t_end));
+    match n {
+        Some(n) if n <= limit => Ok(n),
+        _ => {
+            let shown = n.map_or_else(|| format!("{ratio:.3e}"), |n| n.to_string());
+            Err(format!(
+                "t_end = {t_end:?} with `{name}` = {step:?} makes {shown} {what}, more than \
+                 `max_rows` = {limit}: raise `{name}`, shorten t_end, or raise `max_rows` \
+                 (--max-rows) if you mean it"
+            ))
+        }
     }
-    let n = grid_len(step, t_end);
-    if n > limit {
-        return Err(format!(
-            "t_end = {t_end:?} with `{name}` = {step:?} makes {n} {what}, more than `max_rows` \
-             = {limit}: raise `{name}`, shorten t_end, or raise `max_rows` (--max-rows)"
-        ));
-    }
-    Ok(n)
 }
 
 /// The index of the last point of [`grid`], and whether t_end is one of the k·step.
@@ -419,7 +416,9 @@ mod tests {
             assert!(s.validate().is_err());
         }
         let s = Scene { t_end: 1e9, ..Scene::default() };
-        assert!(s.rows().unwrap_err().contains("1.000e11 output rows"));
+        assert!(s.rows().unwrap_err().contains("100000000001 output rows"));
+        let s = Scene { t_end: 1e300, ..Scene::default() };
+        assert!(s.rows().unwrap_err().contains("1.000e302 output rows"));
         // At the limit exactly: a million rows pass, one more does not.
         let s = Scene { t_end: 999_999.0, dt_out: 1.0, ..Scene::default() };
         assert_eq!(s.rows(), Ok(1_000_000));

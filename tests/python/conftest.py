@@ -51,7 +51,6 @@ def run_cli(binary: Path, args, stdin_text: str | None = None, timeout: float = 
     return proc.stdout
 
 
-#: The columns of the CLI's CSV output, in order.
 #: The CLI's CSV columns, and their headers as the CSV writes them (`name [unit]`, the FMU's
 #: names and units of the same outputs).
 COLUMNS = "t,v1,theta1,u2,dv1,dtheta1,du2,phi_applied,dphi_applied,ddphi_applied,N,P,M,energy,drift".split(",")

@@ -21,7 +21,9 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         ));
     }
     let scene = cli.scene;
-    // Refused before anything is written: a wrong count, or one too large for the disk.
+    // Refused before anything is written: settings that do not make a run, a count of rows
+    // too large for the disk.
+    scene.validate()?;
     let rows = scene.rows()?;
     let to_stdout = cli.output.is_none();
     let sink: Box<dyn Write> = match &cli.output {
