@@ -23,15 +23,21 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import worker
+from .errors import Interrupted, StudyError
 
 #: The default number of cases per chunk, and the least number of chunks (for the balance
 #: of the load between workers and for what an interruption loses).
 CHUNK_CASES = 1000
 MIN_CHUNKS = 16
 
+#: The most cases a run accepts unless told otherwise (`--max-cases`; the CLI's default too):
+#: a typo in a grid's count should be refused, not started as a month of work.
+MAX_CASES = 1_000_000
 
-class StudyError(Exception):
-    """An error the user can act on: printed as `error: ...`, exit status 2."""
+#: The table's formats, by the output's extension.
+FORMATS = {".parquet": "parquet", ".csv": "csv"}
+
+__all__ = ["Interrupted", "StudyError", "plan", "run_study"]
 
 
 def default_cli() -> str:
@@ -58,6 +64,9 @@ class Plan:
     path: Path
     cli: str
     cli_sha256: str
+    #: The CLI's hash of the parsed study and of its fully resolved base scene: a comment,
+    #: the layout or the order of keys does not change it, a value does.
+    fingerprint: str
     cases: int
     columns: list
     parameters: list
@@ -75,18 +84,22 @@ class Plan:
         }
 
     def identity(self, chunk_size: int) -> dict:
-        """What makes finished chunks reusable: the study, its scene, the binary, the
-        chunking (kept in a work directory's manifest)."""
+        """What makes finished chunks reusable: the study and its scene as parsed (not their
+        texts: a comment must not throw away hours of chunks), the binary, the chunking (kept
+        in a work directory's manifest)."""
         return {
-            "study_sha256": sha256_text(self.study_text),
-            "scene_sha256": sha256_text(self.scene_text),
+            "fingerprint": self.fingerprint,
             "cli_sha256": self.cli_sha256,
             "chunk_size": chunk_size,
         }
 
-    def fingerprint(self, chunk_size: int) -> str:
-        """One hash of the identity (the tag of a study's Dask tasks)."""
-        return sha256_text(json.dumps(self.identity(chunk_size), sort_keys=True))
+    def key_tag(self, chunk_size: int) -> str:
+        """One short hash of the identity (the tag of a study's Dask tasks)."""
+        return sha256_text(json.dumps(self.identity(chunk_size), sort_keys=True))[:16]
+
+    def header(self) -> str:
+        """The CSV header line the CLI writes for this study (without its newline)."""
+        return ",".join(c["name"] for c in self.columns)
 
 
 def plan(study: str | Path, cli: str | None = None) -> Plan:
@@ -99,11 +112,17 @@ def plan(study: str | Path, cli: str | None = None) -> Plan:
     if proc.returncode != 0:
         raise StudyError(proc.stderr.strip().removeprefix("error: "))
     info = json.loads(proc.stdout)
+    if "fingerprint" not in info:
+        # The work directory's identity rests on it; without it a re-run could not tell a
+        # changed study from a reformatted one.
+        raise StudyError(f"the beam-body CLI {cli} is too old for this tool: its `study --plan` "
+                         "gives no fingerprint; build the current one (cargo build --release)")
     scene_text = Path(info["scene"]).read_text(encoding="utf-8") if info["scene"] else None
     return Plan(
         path=path,
         cli=cli,
         cli_sha256=worker.file_sha256(cli),
+        fingerprint=info["fingerprint"],
         cases=info["cases"],
         columns=info["columns"],
         parameters=info["parameters"],
@@ -116,6 +135,21 @@ def plan(study: str | Path, cli: str | None = None) -> Plan:
 def default_chunk_size(cases: int) -> int:
     """About CHUNK_CASES cases per chunk, but at least MIN_CHUNKS chunks (and 1 case)."""
     return max(1, min(CHUNK_CASES, math.ceil(cases / MIN_CHUNKS)))
+
+
+def output_format(out: Path, fmt: str | None) -> str:
+    """The table's format: `fmt`, else the output's extension; an unknown extension is
+    refused rather than guessed (`-o x.json` must not quietly hold Parquet)."""
+    if fmt is not None:
+        if fmt not in FORMATS.values():
+            raise StudyError(f"--format {fmt}: must be parquet or csv")
+        return fmt
+    found = FORMATS.get(out.suffix.lower())
+    if found is None:
+        ext = f"not {out.suffix}" if out.suffix else "and the name has no extension"
+        raise StudyError(f"-o {out}: the table is written as .parquet or .csv, {ext} (or name "
+                         "the format with --format parquet|csv)")
+    return found
 
 
 def sha256_text(text: str | None) -> str:
@@ -140,9 +174,18 @@ class WorkDir:
         path.mkdir(parents=True, exist_ok=True)
         self._lock = self._take_lock()
         if manifest.exists() and not restart:
-            old = json.loads(manifest.read_text())
+            try:
+                old = json.loads(manifest.read_text())
+            except ValueError:
+                raise StudyError(f"{manifest} is not a manifest of this tool: pass --restart "
+                                 "to discard the work directory's chunks, or another "
+                                 "--work-dir") from None
+            if "fingerprint" not in old:
+                raise StudyError(f"{path} holds the chunks of an older version of this tool, "
+                                 "which identified a study by its text: pass --restart to "
+                                 "discard them, or another --work-dir")
             if any(old.get(k) != v for k, v in parts.items()):
-                names = {"study_sha256": "the study file", "scene_sha256": "the base scene",
+                names = {"fingerprint": "the study or its base scene",
                          "cli_sha256": "the beam-body binary", "chunk_size": "the chunk size"}
                 changed = [names[k] for k in names if old.get(k) != parts[k]]
                 what = " and ".join([", ".join(changed[:-1]), changed[-1]] if len(changed) > 1
@@ -318,25 +361,26 @@ def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, worke
     # functions by reference, whatever cloudpickle's by-value registry holds; see ByValue.)
     cloudpickle.register_pickle_by_value(worker)
     task = ByValue(worker.run_chunk)
-    cluster = None
-    began = time.perf_counter()
-    if scheduler:
-        client = Client(scheduler, timeout="30s")
-    else:
-        # Workers as threads of this process by default: a task spends its time waiting for
-        # the CLI's process, so worker processes would only add interpreters competing for
-        # the cores (docs/study.md measures both).
-        n = workers if workers is not None else available_cores()
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=local_processes,
-                               dashboard_address=":0")  # a free port: 8787 may be taken
-        client = Client(cluster)
-    progress.startup = time.perf_counter() - began
+    cluster = client = None
     errors = []
+    began = time.perf_counter()
     try:
+        if scheduler:
+            client = Client(scheduler, timeout="30s")
+        else:
+            # Workers as threads of this process by default: a task spends its time waiting
+            # for the CLI's process, so worker processes would only add interpreters competing
+            # for the cores (docs/study.md measures both).
+            n = workers if workers is not None else available_cores()
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1,
+                                   processes=local_processes,
+                                   dashboard_address=":0")  # a free port: 8787 may be taken
+            client = Client(cluster)
+        progress.startup = time.perf_counter() - began
         # The spec goes with every task (a few kB): a task moved to another worker after a
         # death needs nothing that died with the first.
         spec = plan.spec()
-        tag = plan.fingerprint(work.chunk_size)[:16]
+        tag = plan.key_tag(work.chunk_size)
         futures = {}
         for k in todo:
             start, stop = work.bounds(k)
@@ -354,11 +398,27 @@ def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, worke
                 fut.release()
             start, stop = work.bounds(k)
             progress.add(stop - start)
+    except KeyboardInterrupt:
+        # Closing cancels the tasks in flight, and the same Ctrl-C killed their CLI processes:
+        # Dask logs each as a warning or a failed task, news to nobody who pressed Ctrl-C.
+        silence_dask()
+        raise
     finally:
-        client.close()
+        if client is not None:
+            client.close()
         if cluster is not None:
             cluster.close()
     return errors
+
+
+def silence_dask() -> None:
+    """Mutes the loggers of Dask and of its event loop for the rest of the process."""
+    import logging
+
+    names = [n for n in logging.root.manager.loggerDict
+             if n.split(".")[0] in ("distributed", "dask", "tornado", "asyncio")]
+    for name in names + ["distributed", "asyncio", "tornado"]:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
 
 
 def schema(plan: Plan):
@@ -371,36 +431,61 @@ def schema(plan: Plan):
 def assemble(plan: Plan, work: WorkDir, out: Path, fmt: str) -> dict:
     """Writes the table of every chunk, in case order, to `out` (whole or not at all), one
     chunk at a time: a study of 10⁷ rows never sits in memory. Checks that the chunks hold
-    each case once, in order. Returns the count of each status."""
+    each case once, in order. Returns the count of each status.
+
+    CSV is the chunks' own text, the header once: byte for byte what `beam-body study`
+    writes for the whole study, numbers in the CLI's shortest round-trip form (a reader
+    through pyarrow would write them again in its own)."""
     import numpy as np
+    import pyarrow as pa
     import pyarrow.csv as pacsv
     import pyarrow.parquet as pq
 
     meta = {
         b"beam_body.study": plan.study_text.encode(),
         b"beam_body.scene": (plan.scene_text or "").encode(),
+        b"beam_body.fingerprint": plan.fingerprint.encode(),
         b"beam_body.cli_sha256": plan.cli_sha256.encode(),
     }
     sch = schema(plan).with_metadata(meta)
     convert = pacsv.ConvertOptions(column_types=sch, strings_can_be_null=False,
                                    quoted_strings_can_be_null=False)
+    header = (plan.header() + "\n").encode()
     tmp = out.with_name(f"{out.name}.tmp-{os.getpid()}")
-    writer = pq.ParquetWriter(tmp, sch) if fmt == "parquet" else pacsv.CSVWriter(tmp, sch)
     statuses: dict = {}
+    if fmt == "parquet":
+        writer = pq.ParquetWriter(tmp, sch)
+        write, close = writer.write_table, writer.close
+    else:
+        raw = open(tmp, "wb")
+        raw.write(header)
+        write, close = None, raw.close
     try:
         for k in range(work.chunks):
-            part = pacsv.read_csv(work.csv(k), convert_options=convert)
+            data = work.csv(k).read_bytes()
+            first, _, rows = data.partition(b"\n")
+            if first + b"\n" != header:
+                raise StudyError(f"{work.csv(k)}: its header is not the study's "
+                                 f"({plan.header()}): pass --restart to compute it again")
+            try:
+                part = pacsv.read_csv(pa.BufferReader(data), convert_options=convert)
+            except pa.ArrowInvalid as e:
+                raise StudyError(f"{work.csv(k)}: not a chunk of this study ({e}): pass "
+                                 "--restart to compute it again") from None
             start, stop = work.bounds(k)
             if not np.array_equal(part.column("case").to_numpy(), np.arange(start, stop)):
                 raise StudyError(f"{work.csv(k)} does not hold cases {start}..{stop}")
             for status in part.column("status").to_pylist():
                 statuses[status] = statuses.get(status, 0) + 1
-            writer.write_table(part.replace_schema_metadata(meta))
-        if work.chunks == 0:
-            writer.write_table(sch.empty_table())
-        writer.close()
+            if write is not None:
+                write(part.replace_schema_metadata(meta))
+            else:
+                raw.write(rows)
+        if work.chunks == 0 and write is not None:
+            write(sch.empty_table())
+        close()
     except BaseException:
-        writer.close()
+        close()
         tmp.unlink(missing_ok=True)
         raise
     os.replace(tmp, out)
@@ -409,23 +494,28 @@ def assemble(plan: Plan, work: WorkDir, out: Path, fmt: str) -> dict:
 
 def run_study(study, out, *, engine="local", scheduler=None, workers=None, threads=None,
               chunk_size=None, work_dir=None, restart=False, cli=None, fmt=None, quiet=False,
-              local_processes=False):
+              local_processes=False, max_cases=MAX_CASES):
     """Runs a study and writes its table to `out`. Returns a summary dict.
+
+    Ctrl-C raises Interrupted, whose message says how many chunks are kept.
 
     With `engine="dask"` and no scheduler, a script that calls this must guard its top level
     with `if __name__ == "__main__":` when `local_processes` is set: the workers' processes are
     started by multiprocessing's spawn, which imports the script again."""
-    p = plan(study, cli)
     out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fmt = fmt or ("csv" if out.suffix.lower() == ".csv" else "parquet")
-    if fmt not in ("parquet", "csv"):
-        raise StudyError(f"--format {fmt}: must be parquet or csv")
+    fmt = output_format(out, fmt)
+    if engine not in ("local", "dask"):
+        raise StudyError(f"--engine {engine}: must be local or dask")
     for name, value in (("--chunk-size", chunk_size), ("--workers", workers),
-                        ("--threads", threads)):
+                        ("--threads", threads), ("--max-cases", max_cases)):
         if value is not None and value < 1:
             raise StudyError(f"{name} {value}: must be at least 1")
+    p = plan(study, cli)
+    if max_cases is not None and p.cases > max_cases:
+        raise StudyError(f"{study}: the study has {p.cases:,} cases, more than the limit of "
+                         f"{max_cases:,}: pass --max-cases {p.cases} to run them all")
     size = chunk_size if chunk_size is not None else default_chunk_size(p.cases)
+    out.parent.mkdir(parents=True, exist_ok=True)
     work = WorkDir(Path(work_dir) if work_dir else out.with_name(out.name + ".parts"), p, size,
                    restart)
     done = work.done()
@@ -437,12 +527,16 @@ def run_study(study, out, *, engine="local", scheduler=None, workers=None, threa
     progress = Progress(todo_cases, work.chunks, len(done), quiet)
     began = time.perf_counter()
     errors = []
-    if engine == "local":
-        run_local(p, work, todo, threads, progress)
-    elif engine == "dask":
-        errors = run_dask(p, work, todo, scheduler, workers, progress, local_processes)
-    else:
-        raise StudyError(f"--engine {engine}: must be local or dask")
+    try:
+        if engine == "local":
+            run_local(p, work, todo, threads, progress)
+        else:
+            errors = run_dask(p, work, todo, scheduler, workers, progress, local_processes)
+    except KeyboardInterrupt:
+        progress.finish()
+        kept = len(work.done())
+        raise Interrupted(f"{kept} of {work.chunks} chunks are finished and kept in {work.path}; "
+                          "run the same command again to go on from there") from None
     progress.finish()
     seconds = time.perf_counter() - began
     if errors:

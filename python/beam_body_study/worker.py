@@ -61,7 +61,10 @@ def run_chunk(spec: dict, chunk: int, start: int, stop: int, threads: int = 1) -
         study = os.path.join(tmp, "study.toml")
         with open(study, "w", encoding="utf-8") as f:
             f.write(spec["study_text"])
-        cmd = [cli, "study", study, "--cases", f"{start}..{stop}", "--threads", str(threads)]
+        # The limit on cases is the client's (run --max-cases); a chunk larger than the CLI's
+        # default limit, with a larger --chunk-size, must not be refused here.
+        cmd = [cli, "study", study, "--cases", f"{start}..{stop}", "--threads", str(threads),
+               "--max-cases", str(max(1, stop - start))]
         if spec.get("scene_text") is not None:
             scene = os.path.join(tmp, "scene.toml")
             with open(scene, "w", encoding="utf-8") as f:

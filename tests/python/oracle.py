@@ -18,7 +18,7 @@ Formulations (residual conventions of the CLI contract, rows are generalized for
 * reduced:   R_i = d/dt dL/dq'_i - dL/dq_i,  L = T1 + T2 - Pi1 - Pi2,  u_h = u1(q).
 * linear:    first-order Taylor expansion of the reduced R about q = q' = q'' = 0 (phi, phi', phi''
              kept exact).
-* dae / dae-stabilized: E_x = d/dt dL_tot/dx' - dL_tot/dx for x in (v1, theta1, u2), u_h = u2,
+* dae / dae_stabilized: E_x = d/dt dL_tot/dx' - dL_tot/dx for x in (v1, theta1, u2), u_h = u2,
              lambda = E_u2, f = u2 - u1(v1, theta1);
              R_1 = E_v1 - lambda df/dv1, R_2 = E_th1 - lambda df/dth1, R_3 = u2'' - d^2/dt^2 u1.
 
@@ -60,7 +60,7 @@ PAPER_SCENE = {
     "dtheta1_0": 0.0,
 }
 
-FORMULATIONS = ("reduced", "dae", "dae-stabilized", "linear")
+FORMULATIONS = ("reduced", "dae", "dae_stabilized", "linear")
 
 
 def full_params(params=None):
@@ -269,7 +269,7 @@ _FORMS = {
     "linear": _Formulation("linear", ARGS_REDUCED, ACC_REDUCED, SYM["R_linear"]),
     "dae": _Formulation("dae", ARGS_DAE, ACC_DAE, SYM["R_dae"]),
 }
-_FORMS["dae-stabilized"] = _FORMS["dae"]
+_FORMS["dae_stabilized"] = _FORMS["dae"]
 
 
 def formulation(name) -> _Formulation:

@@ -7,11 +7,21 @@ from __future__ import annotations
 import re
 import shlex
 import subprocess
+import sys
 
 import numpy as np
 import pyarrow.parquet as pq
 
 from conftest import REPO
+
+sys.path.insert(0, str(REPO / "python"))
+
+from beam_body_study.columns import bare  # noqa: E402
+
+
+def read_bare(path):
+    """A table as {column name without its unit: values}."""
+    return {bare(k): v for k, v in pq.read_table(path).to_pydict().items()}
 
 
 def readme_study_commands() -> list:
@@ -31,7 +41,7 @@ def test_readme_study_examples(tmp_path):
         assert proc.returncode == 0, f"`{command}` failed:\n{proc.stderr[-4000:]}"
 
     readme = (REPO / "README.md").read_text(encoding="utf-8")
-    turn = pq.read_table(tmp_path / "turn_map.parquet").to_pydict()
+    turn = read_bare(tmp_path / "turn_map.parquet")
     assert len(turn["case"]) == 2812 and set(turn["status"]) == {"ok"}
     t_rot, residual = np.array(turn["t_rot"]), np.array(turn["residual_v1"])
     below = residual < 0.01
@@ -44,7 +54,7 @@ def test_readme_study_examples(tmp_path):
     assert f"{100 * np.mean(last < 0.01):.0f} % of the masses" in readme
     assert f"the worst leaves {100 * last.max():.1f} cm" in readme
 
-    mc = pq.read_table(tmp_path / "hinge_moment_mc.parquet").to_pydict()
+    mc = read_bare(tmp_path / "hinge_moment_mc.parquet")
     assert len(mc["case"]) == 10_000 and set(mc["status"]) == {"ok"}
     peak = np.array(mc["peak_M"])
     q50, q99 = np.quantile(peak, 0.5), np.quantile(peak, 0.99)

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import PAPER_SCENE, REPO, TARGET, run_cli
+from conftest import PAPER_SCENE, REPO, TARGET, read_csv, run_cli
 
 sys.path.insert(0, str(REPO / "python"))
 
@@ -34,6 +34,7 @@ import pyarrow.csv as pacsv  # noqa: E402
 import pyarrow.parquet as pq  # noqa: E402
 
 import oracle  # noqa: E402
+from beam_body_study.columns import bare  # noqa: E402
 
 REPORT = TARGET / "study-report.txt"
 
@@ -99,6 +100,11 @@ def native_table(beam_body, study: Path, tmp: Path, threads=2) -> pa.Table:
     return pacsv.read_csv(out, convert_options=convert)
 
 
+def bare_names(table: pa.Table) -> pa.Table:
+    """The table with its columns named without their units (`peak_M [N.m]` -> `peak_M`)."""
+    return table.rename_columns([bare(name) for name in table.column_names])
+
+
 def same_rows(a: pa.Table, b: pa.Table) -> bool:
     return a.replace_schema_metadata(None).equals(b.replace_schema_metadata(None))
 
@@ -127,7 +133,7 @@ def test_native_local_and_dask_runners_give_identical_tables(beam_body, tmp_path
     complete(native, info["cases"])
     statuses = set(native.column("status").to_pylist())
     assert statuses == {"ok", "stopped"}, statuses  # EI = 20 leaves the range of validity
-    stopped = [r for r in native.to_pylist() if r["status"] == "stopped"]
+    stopped = [r for r in bare_names(native).to_pylist() if r["status"] == "stopped"]
     assert all(r["EI"] == 20 and r["peak_M"] is None and r["steps"] > 0 for r in stopped)
     assert all("range of validity" in r["message"] for r in stopped)
 
@@ -376,13 +382,13 @@ values = [0.7, 1.3]
 [parameters.M2]
 values = [8, 16]
 """)
-    table = native_table(beam_body, study, tmp_path).to_pylist()
+    table = bare_names(native_table(beam_body, study, tmp_path)).to_pylist()
     assert [r["status"] for r in table] == ["ok"] * 4
     for row in table:
         csv = run_cli(beam_body, ["simulate", PAPER_SCENE, "--set", "t_end=4.0", "--set",
                                   "phi_end=1.5707963267948966", "--set", "dt_out=0.005",
                                   "--set", f"t_rot={row['t_rot']}", "--set", f"M2={row['M2']}"])
-        data = np.genfromtxt(csv.splitlines(), delimiter=",", names=True)
+        data = read_csv(csv)
         params = {"M2": row["M2"]}
         v1_eq, _ = oracle.static_equilibrium(math.pi / 2, params)
         after = data["t"] >= row["t_rot"]
@@ -421,7 +427,7 @@ distribution = "uniform"
 low = 0.4
 high = 0.6
 """)
-    rows = native_table(beam_body, study, tmp_path).to_pydict()
+    rows = bare_names(native_table(beam_body, study, tmp_path)).to_pydict()
     sigma = math.sqrt(math.log(1 + 0.2**2))
     lognormal = stats.lognorm(s=sigma, scale=12 * math.exp(-sigma**2 / 2))
     assert abs(lognormal.mean() - 12) < 1e-12 and abs(lognormal.std() - 2.4) < 1e-12
@@ -461,7 +467,7 @@ count = 4
     assert "4 × 2 grid, 4 cells without a value" in proc.stderr, proc.stderr
     proc = front(beam_body, "plot", "hist", out, "--metric", "peak_M", "--quantile", "0.99",
                  "-o", tmp_path / "hist.png")
-    values = [v for v in table.column("peak_M").to_pylist() if v is not None]
+    values = [v for v in bare_names(table).column("peak_M").to_pylist() if v is not None]
     q99 = np.quantile(values, 0.99)
     assert f"q99 = {q99:.6g}" in proc.stderr and f"{len(values)} runs" in proc.stderr
     for png in ("map.png", "hist.png"):

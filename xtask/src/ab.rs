@@ -117,7 +117,7 @@ fn build(dir: &Path, name: &str, library: &Path) -> Result<PathBuf> {
          edition = \"2021\"\npublish = false\n\n{runner_features}[[bin]]\nname = \"{name}\"\n\
          path = \"{}\"\n\n[dependencies]\n\
          beam-body = {{ path = \"{}\", default-features = false{features} }}\n\
-         libc = \"0.2\"\n\n[profile.release]\nlto = \"fat\"\ncodegen-units = 4\n\
+         libc = \"0.2\"\n\n[profile.release]\nlto = \"fat\"\ncodegen-units = 1\n\
          panic = \"unwind\"\ndebug = \"line-tables-only\"\n\n[workspace]\n",
         root.join("xtask").join("ab").join("runner.rs").display(),
         library.display(),
