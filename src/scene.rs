@@ -296,11 +296,17 @@ impl Scene {
     /// settings together and the number of rows.
     pub fn validate(&self) -> Result<BeamBody, String> {
         let model = self.check_model(self.start_phi())?;
+        self.check_grid()?;
+        Ok(model)
+    }
+
+    /// The output rows, and an emulated host's communication steps, against `max_rows`.
+    pub fn check_grid(&self) -> Result<(), String> {
         self.rows()?;
         if self.phi_source == PhiSource::Input {
             count(self.dt_comm, self.t_end, self.max_rows, "dt_comm", "communication steps")?;
         }
-        Ok(model)
+        Ok(())
     }
 
     /// The number of output rows, t = k·dt_out up to and including t_end; an error when it

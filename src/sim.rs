@@ -103,7 +103,8 @@ fn host_sample(scene: &Scene, t: f64) -> Sample {
 
 /// The run of `simulate` at t = 0, before its first step.
 fn start(scene: &Scene) -> Result<Run, SimError> {
-    scene.validate().map_err(SimError::Setting)?;
+    // Run::start checks the model and the settings together; the grid is the driver's.
+    scene.check_grid().map_err(SimError::Setting)?;
     Run::start(scene, 0.0, host_sample(scene, 0.0), BdfConfig::default().max_steps)
 }
 
