@@ -17,7 +17,7 @@ from fmu_util import H0, PHI_SOURCE_LAW, install_logger_proxy
 WARNING = 1
 
 
-def simulate(fmu_unzipdir, stop_time=1.0, **start_values):
+def simulate(fmu_unzipdir, stop_time=1.0, input=None, **start_values):
     """simulate_fmu with a logger and debug logging off: (result, [(status, category, message)])."""
     messages = []
 
@@ -26,7 +26,7 @@ def simulate(fmu_unzipdir, stop_time=1.0, **start_values):
 
     try:
         r = fmpy.simulate_fmu(str(fmu_unzipdir), start_values=start_values, stop_time=stop_time,
-                              output_interval=H0, logger=logger, debug_logging=False)
+                              output_interval=H0, logger=logger, debug_logging=False, input=input)
     finally:
         install_logger_proxy()
     return r, messages
@@ -46,6 +46,17 @@ def test_a_run_with_no_start_values_says_its_input_was_never_set(fmu_unzipdir):
 def test_the_paper_s_turn_warns_nothing(fmu_unzipdir):
     r, messages = simulate(fmu_unzipdir, stop_time=2.0, phi_source=PHI_SOURCE_LAW)
     assert messages == [] and np.max(np.abs(r["v1"])) > 0.1
+
+
+def test_a_host_feeding_phi_to_the_law_is_told_once(fmu_unzipdir):
+    """The other half of the default's choice: a host that selects the law and still feeds phi is told
+    once that its phi is ignored; the law turns the body."""
+    t = np.linspace(0.0, 1.0, 11)
+    signal = np.array(list(zip(t, 0.5 * t)), dtype=[("time", np.float64), ("phi", np.float64)])
+    r, messages = simulate(fmu_unzipdir, input=signal, phi_source=PHI_SOURCE_LAW)
+    warnings = [m for s, c, m in messages if s == WARNING and c == "logStatusWarning"]
+    assert len(warnings) == 1 and "`phi` is ignored" in warnings[0], messages
+    assert abs(r["phi_applied"][-1] - math.pi) < 1e-12  # the law has turned the body; the host sent 0.5
 
 
 def test_range_check_warn_reaches_a_host_with_logging_off(fmu_unzipdir):

@@ -21,8 +21,8 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         ));
     }
     let scene = cli.scene;
-    // Refused before anything is written: settings that do not make a run, a count of rows
-    // too large for the disk.
+    // Refused before the output file is created: settings that do not make a run, a count of
+    // rows too large for the disk. (simulate_partial checks the same again, in microseconds.)
     scene.validate()?;
     let rows = scene.rows()?;
     let to_stdout = cli.output.is_none();

@@ -49,7 +49,6 @@ struct StudyArgs {
 
 fn parse(args: Vec<OsString>) -> Result<Option<StudyArgs>, Failure> {
     let mut parser = lexopt::Parser::from_args(args);
-    let bad = |e: lexopt::Error| Failure::Usage(format!("study: {e} (beam-body study --help)"));
     let mut a = StudyArgs {
         file: String::new(),
         output: None,
@@ -85,26 +84,13 @@ fn parse(args: Vec<OsString>) -> Result<Option<StudyArgs>, Failure> {
                 };
             }
             Long("threads") => {
-                let text = parser.value().map_err(bad)?.string().map_err(bad)?;
-                a.threads = match text.parse::<usize>() {
-                    Ok(n) if (1..=MAX_THREADS).contains(&n) => Some(n),
-                    _ => {
-                        return Err(Failure::Usage(format!(
-                            "--threads {text}: must be an integer in 1..={MAX_THREADS}"
-                        )))
-                    }
-                };
+                let within = |n: &usize| (1..=MAX_THREADS).contains(n);
+                let wanted = format!("an integer in 1..={MAX_THREADS}");
+                a.threads = Some(integer(&mut parser, "--threads", within, &wanted)?);
             }
             Long("max-cases") => {
-                let text = parser.value().map_err(bad)?.string().map_err(bad)?;
-                a.max_cases = match text.parse::<u64>() {
-                    Ok(n) if n >= 1 => n,
-                    _ => {
-                        return Err(Failure::Usage(format!(
-                            "--max-cases {text}: must be a positive integer"
-                        )))
-                    }
-                };
+                a.max_cases =
+                    integer(&mut parser, "--max-cases", |n| *n >= 1, "a positive integer")?;
             }
             Long("scene") => a.scene = Some(parser.value().map_err(bad)?.string().map_err(bad)?),
             Long("quiet") | Short('q') => a.quiet = true,
@@ -124,6 +110,25 @@ fn parse(args: Vec<OsString>) -> Result<Option<StudyArgs>, Failure> {
         )));
     }
     Ok(Some(a))
+}
+
+/// A parser's error as the study's usage error.
+fn bad(e: lexopt::Error) -> Failure {
+    Failure::Usage(format!("study: {e} (beam-body study --help)"))
+}
+
+/// The integer value of `flag`, refused, with the flag and the text, unless `ok`.
+fn integer<T: std::str::FromStr>(
+    parser: &mut lexopt::Parser,
+    flag: &str,
+    ok: impl Fn(&T) -> bool,
+    wanted: &str,
+) -> Result<T, Failure> {
+    let text = parser.value().map_err(bad)?.string().map_err(bad)?;
+    match text.parse::<T>() {
+        Ok(n) if ok(&n) => Ok(n),
+        _ => Err(Failure::Usage(format!("{flag} {text}: must be {wanted}"))),
+    }
 }
 
 pub fn run(args: Vec<OsString>) -> CmdResult {
