@@ -1,4 +1,4 @@
-//! FNV-1a, the one non-cryptographic hash of the crate: the FMU state's checksum, the key of a
+//! FNV-1a, the one non-cryptographic hash of the crate: the FMU state's checksum and the FMU's GUID, the key of a
 //! study parameter's samples, a study's fingerprint. Offset bases and primes from the FNV
 //! reference (Fowler, Noll, Vo; draft-eastlake-fnv).
 #![forbid(unsafe_code)]
@@ -6,6 +6,13 @@
 /// FNV-1a, 64-bit.
 pub fn fnv1a_64(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3))
+}
+
+/// FNV-1a, 128-bit (the FMU's GUID).
+pub fn fnv1a_128(bytes: &[u8]) -> u128 {
+    const OFFSET: u128 = 0x6c62272e07bb014262b821756295c58d;
+    const PRIME: u128 = 0x0000000001000000000000000000013B;
+    bytes.iter().fold(OFFSET, |h, &b| (h ^ b as u128).wrapping_mul(PRIME))
 }
 
 #[cfg(test)]

@@ -10,7 +10,8 @@
 //! - `study` (feature `cli`, on by default): design studies, many runs of one scene over
 //!   parameter grids and Latin hypercube samples, with metrics per run.
 //!
-//! The FMI 2.0 layer (`fmi2`, the only `unsafe` code) sits on top of these.
+//! The FMU sits on top of these: [`fmu`] binds the model to [`fmi`], the generic FMI core,
+//! and `fmi2` (the only `unsafe` code) exports the FMI 2.0 C API over it.
 //!
 //! ```
 //! use beam_body::sim::{simulate, Scene};
@@ -30,7 +31,9 @@
 #![deny(unsafe_code)]
 
 pub mod csv;
+pub mod fmi;
 pub mod fmi2;
+pub mod fmu;
 pub mod hash;
 pub mod math;
 pub mod model;
@@ -41,3 +44,4 @@ pub mod sim;
 pub mod solver;
 #[cfg(feature = "cli")]
 pub mod study;
+pub mod visit;

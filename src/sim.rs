@@ -11,7 +11,8 @@ use crate::model::{
     Poly, RangeCheck, Sample, TwoDofSystem,
 };
 use crate::scene::grid;
-use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, StateVisitor, Stats, StepOutcome};
+use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
+use crate::visit::StateVisitor;
 use nalgebra::SVector;
 use std::fmt;
 use std::ops::ControlFlow;

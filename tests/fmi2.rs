@@ -7,8 +7,10 @@
 
 mod common;
 
-use beam_body::fmi2::ffi::*;
-use beam_body::fmi2::variables::{
+use beam_body::fmi::{reseal, reseal_checksum, HEADER};
+use beam_body::fmi2::exports::*;
+use beam_body::fmi2::types::*;
+use beam_body::fmu::variables::{
     guid, BaseType, Type, Var, DEFAULT_EXPERIMENT, LOG_CATEGORIES, VARIABLES,
 };
 use common::*;
@@ -1674,23 +1676,15 @@ fn stale_and_garbage_fmu_states_are_refused() {
     h.steps(0.03, 0.01, 2);
 }
 
-/// A state's bytes, with its payload, and a way to rewrite the checksum.
-const HEADER: usize = 8 + 4 + 38 + 8;
-
-fn fnv1a_64(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3))
+/// Where field `name` starts in a serialized state (the layout of `beam_body::fmi`'s frame;
+/// the fields before the run's are at the same place in every state).
+fn field_at(name: &str) -> usize {
+    let log: beam_body::fmi::Logger = Box::new(|_, _, _| {});
+    let mut inst = beam_body::fmi2::instantiate("offsets", 1, guid(), log, false).unwrap();
+    let snap = inst.get_state().unwrap();
+    let offsets = beam_body::fmi::field_offsets(&snap);
+    offsets.iter().find(|f| f.0 == name).unwrap_or_else(|| panic!("no field {name}")).1
 }
-
-fn reseal(bytes: &mut [u8]) {
-    let n = bytes.len() - 8;
-    let sum = fnv1a_64(&bytes[..n]);
-    bytes[n..].copy_from_slice(&sum.to_le_bytes());
-}
-
-/// Offsets inside the payload: `state` (8-byte count), then the reals l, EI, m, …
-const STATE_AT: usize = HEADER;
-const L_AT: usize = HEADER + 8;
-const EI_AT: usize = L_AT + 8;
 
 #[test]
 fn serialized_states_continue_bit_for_bit_in_another_instance() {
@@ -1713,11 +1707,12 @@ fn serialized_states_continue_bit_for_bit_in_another_instance() {
     });
     assert!(bytes[size..].iter().all(|b| *b == 0));
     bytes.truncate(size);
-    assert_eq!(&bytes[..8], b"BBFMUST\0");
+    assert_eq!(&bytes[..8], b"FMUSTATE");
     assert_eq!(&bytes[12..50], guid().as_bytes());
     assert_eq!(u64::from_le_bytes(bytes[50..58].try_into().unwrap()) as usize, size - HEADER - 8);
-    assert_eq!(f64::from_le_bytes(bytes[L_AT..L_AT + 8].try_into().unwrap()), 2.5, "l");
-    assert_eq!(f64::from_le_bytes(bytes[EI_AT..EI_AT + 8].try_into().unwrap()), 1000.0, "EI");
+    let (l_at, ei_at) = (field_at("l"), field_at("EI"));
+    assert_eq!(f64::from_le_bytes(bytes[l_at..l_at + 8].try_into().unwrap()), 2.5, "l");
+    assert_eq!(f64::from_le_bytes(bytes[ei_at..ei_at + 8].try_into().unwrap()), 1000.0, "EI");
     assert_eq!(a.serialize(s), bytes, "serialization is deterministic");
 
     // Into a fresh instance, still in `instantiated`.
@@ -1804,7 +1799,7 @@ fn corrupt_serialized_states_are_refused() {
     let resealed = |k: usize, field: &[u8]| {
         let mut bad = bytes.clone();
         bad[k..k + field.len()].copy_from_slice(field);
-        reseal(&mut bad);
+        reseal_checksum(&mut bad);
         bad
     };
     refuse(&resealed(8, &3u32.to_le_bytes()), &["version 3"], "version 3");
@@ -1812,21 +1807,22 @@ fn corrupt_serialized_states_are_refused() {
     refuse(&resealed(8, &0u32.to_le_bytes()), &["version 0"], "version 0");
     let mut magic = bytes.clone();
     magic[0] = b'X';
-    reseal(&mut magic);
+    reseal_checksum(&mut magic);
     refuse(&magic, &["magic"], "magic");
     refuse(&resealed(12, &[b'0'; 38]), &["GUID"], "GUID");
     refuse(&resealed(50, &0u64.to_le_bytes()), &["payload length"], "length 0");
     refuse(&resealed(50, &u64::MAX.to_le_bytes()), &["payload length"], "length max");
-    refuse(&resealed(L_AT, &f64::NAN.to_le_bytes()), &["`l`"], "l = NaN");
-    refuse(&resealed(L_AT, &0.0f64.to_le_bytes()), &["`l`"], "l = 0");
-    refuse(&resealed(L_AT, &(-2.5f64).to_le_bytes()), &["`l`"], "l < 0");
-    refuse(&resealed(L_AT, &f64::INFINITY.to_le_bytes()), &["`l`"], "l = inf");
-    refuse(&resealed(EI_AT, &0.0f64.to_le_bytes()), &["`EI`"], "EI = 0");
-    refuse(&resealed(STATE_AT, &u64::MAX.to_le_bytes()), &["`state`"], "state huge");
-    refuse(&resealed(STATE_AT, &6u64.to_le_bytes()), &["`state`"], "state fatal");
-    refuse(&resealed(STATE_AT, &7u64.to_le_bytes()), &["`state`"], "state 7");
+    let (state_at, l_at, ei_at) = (field_at("state"), field_at("l"), field_at("EI"));
+    refuse(&resealed(l_at, &f64::NAN.to_le_bytes()), &["`l`"], "l = NaN");
+    refuse(&resealed(l_at, &0.0f64.to_le_bytes()), &["`l`"], "l = 0");
+    refuse(&resealed(l_at, &(-2.5f64).to_le_bytes()), &["`l`"], "l < 0");
+    refuse(&resealed(l_at, &f64::INFINITY.to_le_bytes()), &["`l`"], "l = inf");
+    refuse(&resealed(ei_at, &0.0f64.to_le_bytes()), &["`EI`"], "EI = 0");
+    refuse(&resealed(state_at, &u64::MAX.to_le_bytes()), &["`state`"], "state huge");
+    refuse(&resealed(state_at, &6u64.to_le_bytes()), &["`state`"], "state fatal");
+    refuse(&resealed(state_at, &7u64.to_le_bytes()), &["`state`"], "state 7");
     // `instantiated` with an integrator contradicts itself.
-    refuse(&resealed(STATE_AT, &0u64.to_le_bytes()), &["`run`"], "state instantiated");
+    refuse(&resealed(state_at, &0u64.to_le_bytes()), &["`run`"], "state instantiated");
 
     // The existing state and the instance are unharmed.
     assert_eq!(b.serialize(keep), keep_bytes);
@@ -1871,7 +1867,7 @@ fn resealed_garbage_never_panics() {
             if bad == bytes {
                 continue;
             }
-            reseal(&mut bad);
+            reseal_checksum(&mut bad);
             let mut p: fmi2FMUstate = null_mut();
             let st = b.deserialize(&bad, &mut p);
             let records = b.take();
@@ -1926,8 +1922,6 @@ fn fuzz_regressions_of_the_deserializer_are_refused_with_their_reason() {
         let (mode, rest) = input.split_first().expect("a mode byte");
         let mut bytes = rest.to_vec();
         if mode % 2 == 1 {
-            let payload = (bytes.len() - HEADER - 8) as u64;
-            bytes[HEADER - 8..HEADER].copy_from_slice(&payload.to_le_bytes());
             reseal(&mut bytes);
         }
         let mut p: fmi2FMUstate = null_mut();

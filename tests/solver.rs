@@ -2,7 +2,8 @@
 
 use beam_body::math::{cos, exp, log2, powi, sin};
 use beam_body::solver::problems::SlowAndFast;
-use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem, StateVisitor};
+use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem};
+use beam_body::visit::StateVisitor;
 use nalgebra::{Matrix2, SMatrix, Vector1, Vector2, Vector3};
 
 /// Prothero–Robinson: y' = λ(y − sin t) + cos t, exact solution y = sin t.

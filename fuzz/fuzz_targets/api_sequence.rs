@@ -3,10 +3,11 @@
 //! call, and that a successful fmi2DoStep lands exactly on tc + h in stepComplete.
 #![no_main]
 
-use beam_body::fmi2::instance::{
-    Core, Instance, State, Status, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_TERMINATED,
+use beam_body::fmi::{
+    State, Status, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_TERMINATED,
 };
-use beam_body::fmi2::variables::LOG_CATEGORIES;
+use beam_body::fmi2::{Core, Instance};
+use beam_body::fmu::variables::LOG_CATEGORIES;
 use beam_body_fuzz::{check_outputs, check_status, instance, Records};
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;

@@ -7,7 +7,7 @@
 //! checks of every field; even, the rest is passed as it is, which tests the frame.
 #![no_main]
 
-use beam_body::fmi2::instance::{State, Status, STATUS_LAST_SUCCESSFUL_TIME};
+use beam_body::fmi::{State, Status, STATUS_LAST_SUCCESSFUL_TIME};
 use beam_body_fuzz::{check_outputs, check_status, instance, reseal};
 use libfuzzer_sys::fuzz_target;
 

@@ -11,8 +11,10 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use beam_body::fmi2::instance::{Instance, State, Status, FMI2_COSIMULATION};
-use beam_body::fmi2::variables::{guid, BaseType, VARIABLES};
+use beam_body::fmi::{State, Status};
+use beam_body::fmi2::types::FMI2_COSIMULATION;
+use beam_body::fmi2::{instantiate, Instance};
+use beam_body::fmu::variables::{guid, BaseType, VARIABLES};
 
 /// The log records of one instance: (status, category, message).
 pub type Records = Rc<RefCell<Vec<(Status, String, String)>>>;
@@ -24,7 +26,7 @@ pub fn instance(logging_on: bool) -> (Instance, Records) {
     let logger = Box::new(move |status: Status, category: &str, message: &str| {
         sink.borrow_mut().push((status, category.to_string(), message.to_string()));
     });
-    let inst = Instance::instantiate("fuzz", FMI2_COSIMULATION, guid(), logger, logging_on)
+    let inst = instantiate("fuzz", FMI2_COSIMULATION, guid(), logger, logging_on)
         .expect("a valid instantiation");
     (inst, records)
 }
@@ -70,27 +72,4 @@ pub fn check_outputs(inst: &mut Instance, records: &Records) {
     }
 }
 
-/// Bytes of the serialized frame before the payload: magic 8, version 4, GUID 38, payload
-/// length 8 (src/fmi2/state.rs documents the layout).
-pub const HEADER: usize = 8 + 4 + 38 + 8;
-
-/// FNV-1a, 64-bit: the frame's checksum (offset basis and prime from the FNV reference).
-fn fnv1a_64(bytes: &[u8]) -> u64 {
-    bytes
-        .iter()
-        .fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
-}
-
-/// Makes the frame of `bytes` consistent again after a mutation: the payload length and the
-/// checksum. Without this nearly every mutation fails the checksum, and the fuzzer never
-/// reaches the field checks behind it.
-pub fn reseal(bytes: &mut [u8]) {
-    if bytes.len() < HEADER + 8 {
-        return;
-    }
-    let payload = (bytes.len() - HEADER - 8) as u64;
-    bytes[HEADER - 8..HEADER].copy_from_slice(&payload.to_le_bytes());
-    let n = bytes.len() - 8;
-    let sum = fnv1a_64(&bytes[..n]);
-    bytes[n..].copy_from_slice(&sum.to_le_bytes());
-}
+pub use beam_body::fmi::{reseal, HEADER};

@@ -1,19 +1,48 @@
-//! The FMI 2.0 Co-Simulation layer.
+//! The FMI 2.0 Co-Simulation interface: a thin `extern "C"` layer over the generic core
+//! ([`crate::fmi`]) with the beam–body model ([`crate::fmu`]). All the crate's `unsafe`
+//! code is here.
 //!
-//! - [`variables`]: the table of variables, units, types and flags: the single source of
-//!   truth for `modelDescription.xml` and the value references.
-//! - `binding`: the variables bound to the model (parameters, the input, the outputs), with
-//!   get and set by variable: the only place that knows both the table and the model.
-//! - `core`: what an FMU state holds.
-//! - [`instance`]: one FMU instance in safe Rust: the generic state machine, argument checks,
-//!   get and set by value reference, `do_step`, FMU state snapshots.
-//! - `state`: the byte format of a serialized FMU state.
-//! - [`ffi`]: the 34 exported `fmi2…` functions: the only `unsafe` code in the crate. Pointer
-//!   checks, the panic guard, and the host's logger.
+//! - [`types`]: the C types.
+//! - `registry`: the live instances and FMU states; a pointer not in it is refused.
+//! - `guard`: the panic guard and the pointer checks, and the one shape of the get and set
+//!   functions.
+//! - [`exports`]: the 34 exported `fmi2…` functions.
 
-mod binding;
-mod core;
-pub mod ffi;
-pub mod instance;
-mod state;
-pub mod variables;
+pub mod exports;
+mod guard;
+mod registry;
+#[cfg(test)]
+mod tests;
+pub mod types;
+
+use crate::fmi::{self, Logger, Status};
+use crate::fmu::BeamBodyFmu;
+
+/// An FMI 2.0 instance of the beam–body model.
+pub type Instance = fmi::Instance<BeamBodyFmu>;
+/// An FMU state of it.
+pub type Core = fmi::Snapshot<BeamBodyFmu>;
+
+/// The prefix of FMI 2.0's function names, for messages.
+pub const API: &str = "fmi2";
+
+/// fmi2Instantiate in safe Rust: `None`, after logging why, for an empty name, a type other
+/// than co-simulation, or a GUID that is not this model's.
+pub fn instantiate(
+    name: &str,
+    fmu_type: i32,
+    guid: &str,
+    mut log: Logger,
+    logging_on: bool,
+) -> Option<Instance> {
+    if !name.is_empty() && fmu_type != types::FMI2_COSIMULATION {
+        let msg = format!(
+            "fmi2Instantiate: fmuType = {fmu_type}: this FMU provides co-simulation only \
+             (fmi2CoSimulation = {})",
+            types::FMI2_COSIMULATION
+        );
+        log(Status::Error, "logStatusError", &msg);
+        return None;
+    }
+    Instance::instantiate(API, name, guid, log, logging_on)
+}

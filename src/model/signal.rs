@@ -30,7 +30,7 @@
 //! slope); φ′ jumps at every communication point, and the integrator restarts where φ″ does.
 
 use super::phi::{Phi, Poly};
-use crate::solver::{visit_usize, StateVisitor};
+use crate::visit::{visit_usize, StateVisitor};
 
 /// How the pieces of a host's φ are built (the `phi_interpolation` setting).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -54,7 +54,5 @@ pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
 /// solve as the integrator does them (`cargo xtask bench`, costs.csv).
 #[doc(hidden)]
 pub use lu::Lu;
-pub(crate) use snapshot::visit_usize;
-pub use snapshot::StateVisitor;
 pub use stats::Stats;
 pub use system::{OdeSystem, RangeViolation};

@@ -13,21 +13,7 @@
 use super::error::SolverError;
 use nalgebra::{SMatrix, SVector};
 
-/// Visits every field of a state in a fixed order: a writer reads each field, a reader
-/// overwrites it. The names are for error messages.
-pub trait StateVisitor {
-    /// A real field. A reader may store any value, NaN included; `check_state` judges it.
-    fn real(&mut self, name: &'static str, x: &mut f64);
-    /// A counter, order or index. A reader may store any value.
-    fn count(&mut self, name: &'static str, x: &mut u64);
-    /// A boolean field.
-    fn flag(&mut self, name: &'static str, x: &mut bool);
-    /// Called after visiting fields whose values are discarded (those of an absent LU, an
-    /// unset landing time), with whether they held what a writer gives (zeros, the identity
-    /// permutation). A reader may refuse anything else, so that every state has a single
-    /// byte form. By default nothing happens.
-    fn discarded(&mut self, _name: &'static str, _as_written: bool) {}
-}
+pub use crate::visit::{visit_usize, StateVisitor};
 
 /// Largest counter a restored state may hold: 2⁵³. Every integer up to it is exact as an
 /// `f64`, which is how an FMU reports counters. It is also far above any real run: one
@@ -35,14 +21,6 @@ pub trait StateVisitor {
 /// ([`Stats::rejected`](super::Stats::rejected)) and the `+ 1` of a step cannot overflow
 /// from there.
 pub(crate) const MAX_COUNT: u64 = 1 << 53;
-
-/// Visits a `usize` as a `u64`. A value that does not fit the platform's `usize` becomes
-/// `usize::MAX`, which every range check rejects.
-pub(crate) fn visit_usize<V: StateVisitor + ?Sized>(v: &mut V, name: &'static str, x: &mut usize) {
-    let mut c = u64::try_from(*x).unwrap_or(u64::MAX);
-    v.count(name, &mut c);
-    *x = usize::try_from(c).unwrap_or(usize::MAX);
-}
 
 /// Visits the components of a vector in index order.
 pub(crate) fn visit_vector<V: StateVisitor + ?Sized, const N: usize>(

@@ -3,8 +3,9 @@
 //! collector reached through `componentEnvironment`.
 #![allow(dead_code)] // not every test binary uses every helper
 
-use beam_body::fmi2::ffi::*;
-use beam_body::fmi2::variables::{guid, Var, LOG_CATEGORIES};
+use beam_body::fmi2::exports::*;
+use beam_body::fmi2::types::*;
+use beam_body::fmu::variables::{guid, Var, LOG_CATEGORIES};
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::ptr::{null, null_mut};
 use std::sync::{Mutex, RwLock, RwLockReadGuard, RwLockWriteGuard};

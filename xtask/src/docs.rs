@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use beam_body::fmi2::variables::{
+use beam_body::fmu::variables::{
     self as vars, EnumType, Type, Variable, CAPABILITIES, DEFAULT_EXPERIMENT, FORMULATION_TYPE,
     PHI_SOURCE_TYPE, VARIABLES,
 };
@@ -302,7 +302,7 @@ pub fn index_html() -> String {
 
 #[cfg(test)]
 mod tests {
-    use beam_body::fmi2::variables::{FORMULATION_TYPE, PHI_SOURCE_TYPE, VARIABLES};
+    use beam_body::fmu::variables::{FORMULATION_TYPE, PHI_SOURCE_TYPE, VARIABLES};
 
     use super::{esc, index_html};
 

@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use beam_body::fmi2::variables::{Var, DEFAULT_EXPERIMENT, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
+use beam_body::fmu::variables::{Var, DEFAULT_EXPERIMENT, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipArchive, ZipWriter};
 
@@ -361,7 +361,7 @@ fn step(instance: &mut InstanceCS, tc: f64, h: f64) -> Result {
 /// The FMU's rows in the CLI's CSV form (beam_body::csv): headers with units, numbers that
 /// read back exactly.
 fn write_csv(path: &Path, rows: &[[f64; 4]]) -> Result {
-    use beam_body::fmi2::variables::Type;
+    use beam_body::fmu::variables::Type;
     let mut text = beam_body::csv::header("t", Some("s"));
     for var in RECORDED {
         let unit = match var.info().ty {
@@ -445,7 +445,7 @@ fn compare(rows: &[[f64; 4]], reference: &Path, fmu_csv: &Path) -> Result {
                 |best, (k, d)| if d > best.1 || d.is_nan() { (k, d) } else { best },
             );
         let unit = match info.ty {
-            beam_body::fmi2::variables::Type::Real { unit: Some(unit), .. } => unit,
+            beam_body::fmu::variables::Type::Real { unit: Some(unit), .. } => unit,
             _ => "",
         };
         println!("    {:<8} {:<12} {unit:<4} at t = {}", info.name, sig(diff), sig(rows[k][0]));

@@ -19,8 +19,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-use beam_body::fmi2::instance::{Instance, Logger, Status, FMI2_COSIMULATION};
-use beam_body::fmi2::variables::{guid, Var};
+use beam_body::fmi::{Logger, Status};
+use beam_body::fmi2::types::FMI2_COSIMULATION;
+use beam_body::fmi2::{instantiate, Instance};
+use beam_body::fmu::variables::{guid, Var};
 
 use crate::{cargo, project_root, relative, target_dir, Result};
 
@@ -206,7 +208,7 @@ fn write_state_seeds(dir: &Path) -> Result {
     let mut seeds: Vec<Vec<u8>> = Vec::new();
     let quiet = || -> Logger { Box::new(|_, _, _| {}) };
     let new = || {
-        Instance::instantiate("seed", FMI2_COSIMULATION, guid(), quiet(), false)
+        instantiate("seed", FMI2_COSIMULATION, guid(), quiet(), false)
             .ok_or("cannot instantiate the FMU in-process")
     };
     let snapshot = |inst: &mut Instance| -> Result<Vec<u8>> {

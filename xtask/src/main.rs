@@ -2,7 +2,7 @@
 //!
 //! The alias runs the launcher (`xtask/launch`) first, which makes sure libclang is there for
 //! fmi-sys's bindgen, then this crate. Its dependencies: the interface tables of the library
-//! (`beam_body::fmi2::variables`), quick-xml, zip, fmi (the native FMI host, with log and
+//! (`beam_body::fmu::variables`), quick-xml, zip, fmi (the native FMI host, with log and
 //! tempfile), libloading and nalgebra, and diffsol with the feature `bench` only (see
 //! Cargo.toml for why each).
 

@@ -1,5 +1,5 @@
 //! `cargo xtask gen`: `modelDescription/modelDescription.xml` from the interface tables in
-//! `beam_body::fmi2::variables`, the single source of truth.
+//! `beam_body::fmu::variables`, the single source of truth.
 //!
 //! The file is committed. Two tests keep it honest: it must equal what [`generate`] writes
 //! now, byte for byte, and read back with quick-xml it must say what the tables say.
@@ -8,7 +8,7 @@
 use std::fs;
 use std::path::PathBuf;
 
-use beam_body::fmi2::variables::{
+use beam_body::fmu::variables::{
     self as vars, Causality, EnumType, Type, Variability, Variable, CAPABILITIES,
     DEFAULT_EXPERIMENT, ENUM_TYPES, LOG_CATEGORIES, UNITS, VARIABLES,
 };
@@ -375,7 +375,7 @@ mod tests {
     use std::collections::HashMap;
     use std::fs;
 
-    use beam_body::fmi2::variables::{
+    use beam_body::fmu::variables::{
         self as vars, Causality, Type, Variability, CAPABILITIES, DEFAULT_EXPERIMENT, ENUM_TYPES,
         LOG_CATEGORIES, UNITS, VARIABLES,
     };

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use beam_body::fmi2::variables::MODEL_IDENTIFIER;
+use beam_body::fmu::variables::MODEL_IDENTIFIER;
 
 use crate::{cargo, project_root, relative, run_cmd, system, target_dir, Result};
 

@@ -20,7 +20,7 @@ pub fn ensure_venv() -> Result<PathBuf> {
     let requirements = project_root().join("tests").join("requirements.txt");
     let content = fs::read(&requirements)
         .map_err(|err| format!("cannot read {}: {err}", relative(&requirements)))?;
-    let hash = format!("{:016x}", fnv1a(&content));
+    let hash = format!("{:016x}", beam_body::hash::fnv1a_64(&content));
     let stamp = venv.join(".requirements-hash");
     if fs::read_to_string(&stamp).is_ok_and(|old| old.trim() == hash) {
         eprintln!("{} is up to date with {}", relative(&venv), relative(&requirements));
@@ -65,23 +65,4 @@ fn venv_module_missing() -> bool {
         .stderr(Stdio::null())
         .status()
         .is_ok_and(|status| !status.success())
-}
-
-/// 64-bit FNV-1a: small, stable across runs and Rust versions (unlike `DefaultHasher`).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, &byte| {
-        (hash ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3)
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::fnv1a;
-
-    #[test]
-    fn fnv1a_reference_values() {
-        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
-        assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
-    }
 }

@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use beam_body::fmi2::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
+use beam_body::fmu::variables::{Var, FORMULATION_TYPE, MODEL_IDENTIFIER, PHI_SOURCE_TYPE};
 use beam_body::model::Formulation;
 use beam_body::sim::Scene;
 

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use beam_body::fmi2::variables::{Var, MODEL_IDENTIFIER};
+use beam_body::fmu::variables::{Var, MODEL_IDENTIFIER};
 use beam_body::sim::Scene;
 
 use crate::bench::fmu::set_scene;

@@ -1,12 +1,20 @@
-//! The single source of truth for the FMU's interface: every variable with its value
-//! reference, causality, variability, type, start value, unit and description; the unit and
-//! enumeration types; the log categories; the default experiment; the capability flags.
+//! The single source of truth for the beam–body FMU's interface: every variable with its
+//! value reference, causality, variability, type, start value, unit and description; the
+//! units; the default experiment; the capability flags. Parameters are rows of the settings
+//! table ([`crate::settings`]), so their name, unit, range, start value and description come
+//! from there.
 //!
 //! `cargo xtask gen` writes `modelDescription/modelDescription.xml` from these tables, the
-//! instance code dispatches on [`Var`], and the GUID is a hash of the tables
-//! ([`guid`]), so the three cannot drift apart. No I/O, no `unsafe`.
+//! binding dispatches on [`Var`], and the GUID is a hash of the tables ([`guid`]), so the
+//! three cannot drift apart. No I/O, no `unsafe`.
 #![forbid(unsafe_code)]
 
+pub use crate::fmi::description::{
+    BaseType, Capabilities, Causality, DefaultExperiment, Type, Unit, VarInfo, Variability,
+    LOG_CATEGORIES,
+};
+use crate::hash::fnv1a_128;
+use std::fmt;
 use std::sync::OnceLock;
 
 /// `modelIdentifier`, the binary's name and the prefix of nothing (the binary exports the
@@ -25,31 +33,10 @@ pub const MODEL_VERSION: &str = env!("CARGO_PKG_VERSION");
 pub const GENERATION_TOOL: &str = concat!("beam-body ", env!("CARGO_PKG_VERSION"));
 
 /// `<DefaultExperiment>`: the paper's scene (12 turn periods T = 0.85 s, its output step).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DefaultExperiment {
-    pub start_time: f64,
-    pub stop_time: f64,
-    pub tolerance: f64,
-    pub step_size: f64,
-}
-
 pub const DEFAULT_EXPERIMENT: DefaultExperiment =
     DefaultExperiment { start_time: 0.0, stop_time: 10.2, tolerance: 1e-6, step_size: 0.0085 };
 
 /// The `<CoSimulation>` capability flags. Each one that is true is implemented and tested.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Capabilities {
-    pub can_handle_variable_communication_step_size: bool,
-    pub can_interpolate_inputs: bool,
-    pub max_output_derivative_order: u32,
-    pub can_run_asynchronuously: bool,
-    pub can_be_instantiated_only_once_per_process: bool,
-    pub can_not_use_memory_management_functions: bool,
-    pub can_get_and_set_fmu_state: bool,
-    pub can_serialize_fmu_state: bool,
-    pub provides_directional_derivative: bool,
-}
-
 pub const CAPABILITIES: Capabilities = Capabilities {
     can_handle_variable_communication_step_size: true,
     can_interpolate_inputs: true,
@@ -62,18 +49,8 @@ pub const CAPABILITIES: Capabilities = Capabilities {
     provides_directional_derivative: false,
 };
 
-/// A `<Unit>`: name and SI base-unit exponents (kg, m, s, rad; the others are zero).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Unit {
-    pub name: &'static str,
-    pub kg: i32,
-    pub m: i32,
-    pub s: i32,
-    pub rad: i32,
-}
-
 const fn unit(name: &'static str, kg: i32, m: i32, s: i32, rad: i32) -> Unit {
-    Unit { name, kg, m, s, rad }
+    Unit::new(name, kg, m, s, rad)
 }
 
 pub const UNITS: &[Unit] = &[
@@ -98,73 +75,6 @@ pub use crate::settings::{
     RANGE_CHECK_TYPE,
 };
 use crate::settings::{Key, Kind, Setting, Value};
-
-/// `<LogCategories>`: (name, description). Errors are always logged; the others only when
-/// debug logging is on for them.
-pub const LOG_CATEGORIES: &[(&str, &str)] = &[
-    ("logStatusWarning", "Warnings"),
-    ("logStatusDiscard", "Steps that ended early (fmi2Discard)"),
-    ("logStatusError", "Errors: illegal calls, bad arguments, failed steps"),
-    ("logStatusFatal", "Fatal errors: a caught panic"),
-    ("logCalls", "Every call of the FMI API, with its arguments"),
-    ("logAll", "All of the above"),
-];
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Causality {
-    Parameter,
-    Input,
-    Output,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Variability {
-    Fixed,
-    Continuous,
-}
-
-/// A variable's type, start value and range.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Type {
-    /// `start` is `None` for outputs (initial = "calculated").
-    Real {
-        unit: Option<&'static str>,
-        start: Option<f64>,
-        min: Option<f64>,
-        max: Option<f64>,
-    },
-    Integer {
-        start: i32,
-        min: i32,
-        max: i32,
-    },
-    Enumeration {
-        ty: &'static EnumType,
-        start: i32,
-    },
-    Boolean {
-        start: bool,
-    },
-}
-
-impl Type {
-    /// The FMI base type whose functions (fmi2GetReal, …) access the variable.
-    pub fn base(&self) -> BaseType {
-        match self {
-            Type::Real { .. } => BaseType::Real,
-            Type::Integer { .. } | Type::Enumeration { .. } => BaseType::Integer,
-            Type::Boolean { .. } => BaseType::Boolean,
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BaseType {
-    Real,
-    Integer,
-    Boolean,
-    String,
-}
 
 /// The variables, by value reference. Value references are unique across all types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -227,15 +137,12 @@ impl Var {
     }
 }
 
-/// One `<ScalarVariable>`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One `<ScalarVariable>`: what the FMI core knows of it ([`VarInfo`], which it derefs to),
+/// and what the binding needs: its [`Var`] and, for a parameter, its setting.
+#[derive(Clone, Copy, PartialEq)]
 pub struct Variable {
     pub var: Var,
-    pub name: &'static str,
-    pub causality: Causality,
-    pub variability: Variability,
-    pub ty: Type,
-    pub description: &'static str,
+    pub info: VarInfo,
     /// The setting of a parameter ([`crate::settings`]), whose row gives the rest.
     pub setting: Option<Key>,
 }
@@ -243,6 +150,30 @@ pub struct Variable {
 impl Variable {
     pub fn vr(&self) -> u32 {
         self.var.vr()
+    }
+}
+
+impl std::ops::Deref for Variable {
+    type Target = VarInfo;
+    fn deref(&self) -> &VarInfo {
+        &self.info
+    }
+}
+
+/// Field by field as the table's rows were before [`VarInfo`] was split out: the GUID hashes
+/// this text, so it stays the same for the same interface.
+impl fmt::Debug for Variable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let i = &self.info;
+        f.debug_struct("Variable")
+            .field("var", &self.var)
+            .field("name", &i.name)
+            .field("causality", &i.causality)
+            .field("variability", &i.variability)
+            .field("ty", &i.ty)
+            .field("description", &i.description)
+            .field("setting", &self.setting)
+            .finish()
     }
 }
 
@@ -267,11 +198,13 @@ const fn param(var: Var, key: Key) -> Variable {
     };
     Variable {
         var,
-        name: s.name,
-        causality: Causality::Parameter,
-        variability: Variability::Fixed,
-        ty,
-        description: s.description,
+        info: VarInfo {
+            name: s.name,
+            causality: Causality::Parameter,
+            variability: Variability::Fixed,
+            ty,
+            description: s.description,
+        },
         setting: Some(key),
     }
 }
@@ -284,11 +217,13 @@ const fn output(
 ) -> Variable {
     Variable {
         var,
-        name,
-        causality: Causality::Output,
-        variability: Variability::Continuous,
-        ty: Type::Real { unit: Some(unit), start: None, min: None, max: None },
-        description,
+        info: VarInfo {
+            name,
+            causality: Causality::Output,
+            variability: Variability::Continuous,
+            ty: Type::Real { unit: Some(unit), start: None, min: None, max: None },
+            description,
+        },
         setting: None,
     }
 }
@@ -317,11 +252,13 @@ pub const VARIABLES: &[Variable] = &[
     param(Var::StabilityGuard, Key::StabilityGuard),
     Variable {
         var: Var::Phi,
-        name: "phi",
-        causality: Causality::Input,
-        variability: Variability::Continuous,
-        ty: Type::Real { unit: Some("rad"), start: Some(0.0), min: None, max: None },
-        description: "Hinge angle of the body (used with phi_source = input)",
+        info: VarInfo {
+            name: "phi",
+            causality: Causality::Input,
+            variability: Variability::Continuous,
+            ty: Type::Real { unit: Some("rad"), start: Some(0.0), min: None, max: None },
+            description: "Hinge angle of the body (used with phi_source = input)",
+        },
         setting: None,
     },
     output(Var::V1, "v1", "m", "Tip deflection"),
@@ -387,14 +324,6 @@ pub fn guid() -> &'static str {
         formatted.as_bytes().try_into().expect("a braced UUID has 38 characters")
     });
     std::str::from_utf8(bytes).expect("hex digits, dashes and braces")
-}
-
-/// FNV-1a, 128-bit variant (Fowler, Noll, Vo; offset basis and prime from the FNV
-/// reference, draft-eastlake-fnv).
-fn fnv1a_128(bytes: &[u8]) -> u128 {
-    const OFFSET: u128 = 0x6c62272e07bb014262b821756295c58d;
-    const PRIME: u128 = 0x0000000001000000000000000000013B;
-    bytes.iter().fold(OFFSET, |h, &b| (h ^ b as u128).wrapping_mul(PRIME))
 }
 
 /// The variable called `name`.

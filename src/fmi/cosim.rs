@@ -1,0 +1,253 @@
+//! Co-simulation's calls on an instance whose model integrates itself ([`CoSimulation`]):
+//! the step, the derivatives of inputs and outputs, and FMI 2.0's status queries.
+#![forbid(unsafe_code)]
+
+use super::description::{BaseType, Causality};
+use super::instance::{trace, Instance};
+use super::machine::{mask, FmiError, FmiResult, State, Status};
+use super::model::{CoSimulation, Notes};
+use super::snapshot::same_time;
+
+/// fmi2StatusKind.
+pub const STATUS_DO_STEP: i32 = 0;
+pub const STATUS_PENDING: i32 = 1;
+pub const STATUS_LAST_SUCCESSFUL_TIME: i32 = 2;
+pub const STATUS_TERMINATED: i32 = 3;
+
+impl<M: CoSimulation> Instance<M> {
+    /// SetRealInputDerivatives: derivatives of the inputs at the next communication point,
+    /// for the next step only.
+    pub fn set_real_input_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        values: &[f64],
+    ) -> Status {
+        let r = self.try_set_real_input_derivatives(vrs, orders, values);
+        self.status(r)
+    }
+
+    fn try_set_real_input_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        values: &[f64],
+    ) -> FmiResult {
+        let f = self.func("SetRealInputDerivatives");
+        self.allowed(f, mask::SET)?;
+        if vrs.len() != orders.len() || vrs.len() != values.len() {
+            return Err(FmiError::error(format!("{f}: arrays of different lengths")));
+        }
+        let max = M::MAX_INPUT_DERIVATIVE_ORDER;
+        for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
+            let info = Self::lookup(f, *vr, BaseType::Real)?;
+            if info.causality != Causality::Input {
+                let inputs: Vec<String> = (0..M::variable_count() as u32)
+                    .filter_map(|k| M::variable(k).map(|v| (k, v)))
+                    .filter(|(_, v)| v.causality == Causality::Input)
+                    .map(|(k, v)| format!("`{}` ({k})", v.name))
+                    .collect();
+                return Err(FmiError::error(format!(
+                    "{f}: value reference {vr} is not an input; only {} is",
+                    inputs.join(", ")
+                )));
+            }
+            if !(1..=max).contains(order) {
+                let orders: Vec<String> = (1..=max).map(|k| k.to_string()).collect();
+                return Err(FmiError::error(format!(
+                    "{f}: order {order} of `{}` is out of range: must be {}",
+                    info.name,
+                    orders.join(" or ")
+                )));
+            }
+            if !value.is_finite() {
+                return Err(FmiError::error(format!(
+                    "{f}: derivative of order {order} of `{}` = {value} is out of range: \
+                     must be finite",
+                    info.name
+                )));
+            }
+        }
+        for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
+            self.core.model.set_input_derivative(*vr, *order, *value);
+        }
+        trace!(self, "{f}: vr {vrs:?}, order {orders:?}, value {values:?}");
+        Ok(Status::Ok)
+    }
+
+    /// GetRealOutputDerivatives: time derivatives of the outputs at the communication time,
+    /// where the model gives them: masters that extrapolate their inputs use these.
+    pub fn get_real_output_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        out: &mut [f64],
+    ) -> Status {
+        let f = self.func("GetRealOutputDerivatives");
+        let r = (|| {
+            self.allowed(f, mask::OUTPUT_DERIVATIVES)?;
+            let max = M::MAX_OUTPUT_DERIVATIVE_ORDER;
+            for ((vr, order), slot) in vrs.iter().zip(orders).zip(out.iter_mut()) {
+                let info = Self::lookup(f, *vr, BaseType::Real)?;
+                if info.causality != Causality::Output {
+                    return Err(FmiError::error(format!(
+                        "{f}: `{}` ({vr}) is not an output",
+                        info.name
+                    )));
+                }
+                if !(1..=max).contains(order) {
+                    return Err(FmiError::error(format!(
+                        "{f}: order {order} of `{}` is out of range: must be 1..={max} \
+                         (maxOutputDerivativeOrder)",
+                        info.name
+                    )));
+                }
+                let setup = self.core.setup;
+                let x = self
+                    .core
+                    .model
+                    .output_derivative(*vr, *order, &setup)
+                    .map_err(|msg| {
+                        FmiError::error(format!("{f}: the outputs cannot be computed: {msg}"))
+                    })?
+                    .ok_or_else(|| {
+                        FmiError::error(format!(
+                            "{f}: `{}` has no derivative of order {order}: only {} have",
+                            info.name,
+                            M::outputs_with_derivatives(*order)
+                        ))
+                    })?;
+                if !x.is_finite() {
+                    return Err(FmiError::error(format!(
+                        "{f}: the derivative of order {order} of `{}` is not finite at t = {}",
+                        info.name, self.core.time
+                    )));
+                }
+                *slot = x;
+            }
+            trace!(self, "{f}: vr {vrs:?}, order {orders:?}, value {out:?}");
+            Ok(Status::Ok)
+        })();
+        self.status(r)
+    }
+
+    /// DoStep: integrates from `tc` to exactly `tc + h`.
+    pub fn do_step(&mut self, tc: f64, h: f64) -> Status {
+        let r = self.try_do_step(tc, h);
+        self.status(r)
+    }
+
+    fn try_do_step(&mut self, tc: f64, h: f64) -> FmiResult {
+        let f = self.func("DoStep");
+        self.allowed(f, mask::STEP_COMPLETE)?;
+        let time = self.core.time;
+        if !(h.is_finite() && h > 0.0) {
+            return Err(FmiError::error(format!(
+                "{f}: communicationStepSize = {h} is out of range: must be positive and finite"
+            )));
+        }
+        // "Up to rounding": hosts compute tc as start + n·h or by sums; allow a few ulps.
+        if !(tc.is_finite() && same_time(tc, time, h)) {
+            return Err(FmiError::error(format!(
+                "{f}: currentCommunicationPoint = {tc} does not match the FMU's time {time}"
+            )));
+        }
+        if tc + h == tc {
+            return Err(FmiError::error(format!(
+                "{f}: communicationStepSize = {h:?} is below the resolution of the time \
+                 tc = {tc:?} (tc + h = tc): the step would not advance"
+            )));
+        }
+        let target = tc + h;
+        if let Some(stop) = self.core.setup.stop_time {
+            if target > stop && !same_time(target, stop, h) {
+                return Err(FmiError::error(format!(
+                    "{f}: the step to t = {target} passes stopTime = {stop}"
+                )));
+            }
+        }
+        trace!(self, "{f}: tc = {tc}, h = {h}");
+        let mut notes = Notes::new();
+        let result = self.core.model.do_step(tc, target, &mut notes);
+        let told = self.notes(f, notes);
+        if let Err(e) = result {
+            let t = e.t;
+            self.core.time = t;
+            self.core.last_successful_time = t;
+            self.core.terminated = true;
+            self.core.state = State::StepFailed;
+            return Err(FmiError::discard(format!(
+                "{f}: {}. The FMU stopped at t = {t} (fmi2LastSuccessfulTime), with \
+                 fmi2Terminated = true",
+                e.message
+            )));
+        }
+        self.core.time = target;
+        self.core.last_successful_time = target;
+        Ok(told)
+    }
+
+    /// CancelStep: steps are synchronous, so there is never one to cancel.
+    pub fn cancel_step(&mut self) -> Status {
+        let f = self.func("CancelStep");
+        let r = self.allowed(f, mask::NONE).map(|()| Status::Error);
+        self.status(r)
+    }
+
+    /// GetStatus, GetIntegerStatus, GetStringStatus (FMI 2.0): none of their kinds is
+    /// provided (they concern asynchronous steps).
+    pub fn get_unprovided_status(&mut self, name: &'static str, kind: i32) -> Status {
+        let f = self.func(name);
+        let r = self.allowed(f, mask::STATUS).and_then(|()| {
+            Err(FmiError::error(format!(
+                "{f}: status kind {kind} is not provided: fmi2DoStep never returns fmi2Pending"
+            )))
+        });
+        self.status(r)
+    }
+
+    /// GetRealStatus (FMI 2.0): fmi2LastSuccessfulTime.
+    pub fn get_real_status(&mut self, kind: i32) -> Result<f64, Status> {
+        let f = self.func("GetRealStatus");
+        let r = self.allowed(f, mask::STATUS).and_then(|()| {
+            if kind != STATUS_LAST_SUCCESSFUL_TIME {
+                return Err(FmiError::error(format!(
+                    "{f}: status kind {kind} is not provided: only fmi2LastSuccessfulTime \
+                     ({STATUS_LAST_SUCCESSFUL_TIME})"
+                )));
+            }
+            let t = self.core.last_successful_time;
+            trace!(self, "{f}: fmi2LastSuccessfulTime = {t:?}");
+            Ok(t)
+        });
+        self.edge(r)
+    }
+
+    /// GetBooleanStatus (FMI 2.0): fmi2Terminated.
+    pub fn get_boolean_status(&mut self, kind: i32) -> Result<bool, Status> {
+        let f = self.func("GetBooleanStatus");
+        let r = self.allowed(f, mask::STATUS).and_then(|()| {
+            if kind != STATUS_TERMINATED {
+                return Err(FmiError::error(format!(
+                    "{f}: status kind {kind} is not provided: only fmi2Terminated \
+                     ({STATUS_TERMINATED})"
+                )));
+            }
+            let terminated = self.core.terminated;
+            trace!(self, "{f}: fmi2Terminated = {terminated}");
+            Ok(terminated)
+        });
+        self.edge(r)
+    }
+
+    /// GetDirectionalDerivative: not provided (providesDirectionalDerivative = false).
+    pub fn get_directional_derivative(&mut self) -> Status {
+        let f = self.func("GetDirectionalDerivative");
+        let r = self.allowed(f, mask::GET).and_then(|()| {
+            Err(FmiError::error(format!(
+                "{f}: not provided (providesDirectionalDerivative = false)"
+            )))
+        });
+        self.status(r)
+    }
+}

@@ -1,0 +1,643 @@
+//! One FMU instance, generic over its model: the state machine, logging, argument checks,
+//! get and set by value reference, the lifecycle and FMU state snapshots. Co-simulation's
+//! calls are in [`cosim`](super::cosim).
+//!
+//! An interface layer (`fmi2`) turns C pointers into slices and strings and calls these
+//! methods; everything else happens here or in the model. Each method logs its own errors
+//! through the instance's [`Logger`] and returns the status. No `unsafe`, no I/O.
+#![forbid(unsafe_code)]
+
+use super::description::{BaseType, Causality, VarInfo, LOG_CATEGORIES};
+use super::machine::{mask, FmiError, FmiResult, State, Status};
+use super::model::{Model, Notes, Setup, Value};
+use super::snapshot::{self, Snapshot};
+use std::fmt;
+
+/// Logs a call when `logCalls` is on: the message, and even its arguments, only then.
+macro_rules! trace {
+    ($inst:expr, $($arg:tt)*) => {
+        if $inst.logging.0[$crate::fmi::instance::LOG_CALLS] {
+            $inst.trace(format_args!($($arg)*))
+        }
+    };
+}
+pub(crate) use trace;
+
+/// The index of `logCalls` in [`LOG_CATEGORIES`].
+pub(crate) const LOG_CALLS: usize = 4;
+
+/// Where log messages go: (status, category, message). The interface layer forwards them to
+/// the host's logger; tests collect them.
+pub type Logger = Box<dyn FnMut(Status, &str, &str)>;
+
+/// Log switches, per category of [`LOG_CATEGORIES`].
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LogFlags(pub(crate) [bool; LOG_CATEGORIES.len()]);
+
+/// A function's name in messages: the interface's prefix (`fmi2`) and the name (`DoStep`),
+/// joined only when a message is written.
+#[derive(Clone, Copy)]
+pub struct Func(pub &'static str, pub &'static str);
+
+impl fmt::Display for Func {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}{}", self.0, self.1)
+    }
+}
+
+/// One FMU instance.
+pub struct Instance<M> {
+    name: String,
+    /// The prefix of the interface's function names, for messages.
+    api: &'static str,
+    log: Logger,
+    pub(crate) logging: LogFlags,
+    pub(crate) core: Snapshot<M>,
+}
+
+impl<M: fmt::Debug> fmt::Debug for Instance<M> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Instance").field("name", &self.name).field("core", &self.core).finish()
+    }
+}
+
+/// "`name` (vr) = value, …" for the traces of get and set calls; formatted only when a
+/// trace is written.
+struct Listing<'a, M, T>(&'a [u32], &'a [T], std::marker::PhantomData<M>);
+
+impl<M: Model, T: fmt::Debug> fmt::Display for Listing<'_, M, T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (k, (vr, value)) in self.0.iter().zip(self.1).enumerate() {
+            let name = M::variable(*vr).map_or("?", |v| v.name);
+            let sep = if k == 0 { "" } else { ", " };
+            write!(f, "{sep}`{name}` ({vr}) = {value:?}")?;
+        }
+        if self.0.is_empty() {
+            write!(f, "no variables")?;
+        }
+        Ok(())
+    }
+}
+
+fn listing<'a, M, T>(vrs: &'a [u32], values: &'a [T]) -> Listing<'a, M, T> {
+    Listing(vrs, values, std::marker::PhantomData)
+}
+
+impl<M: Model> Instance<M> {
+    /// A new instance called `name` of the interface whose functions start with `api`
+    /// (`fmi2`), after checking the name and the GUID. `None`, after logging why, otherwise.
+    pub fn instantiate(
+        api: &'static str,
+        name: &str,
+        guid: &str,
+        mut log: Logger,
+        logging_on: bool,
+    ) -> Option<Instance<M>> {
+        let func = Func(api, "Instantiate");
+        let checked = if name.is_empty() {
+            Err("instanceName is empty".to_string())
+        } else if guid != M::guid() {
+            Err(format!(
+                "fmuGUID {guid} does not match this binary's {}: wrong or stale FMU",
+                M::guid()
+            ))
+        } else {
+            Ok(())
+        };
+        if let Err(msg) = checked {
+            log(Status::Error, "logStatusError", &format!("{func}: {msg}"));
+            return None;
+        }
+        let mut inst = Instance {
+            name: name.to_string(),
+            api,
+            log,
+            logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
+            core: Snapshot::new(),
+        };
+        inst.trace(format_args!("{func}: instance `{name}`"));
+        Some(inst)
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn state(&self) -> State {
+        self.core.state
+    }
+
+    /// The name of function `name` of this instance's interface, for messages.
+    pub(crate) fn func(&self, name: &'static str) -> Func {
+        Func(self.api, name)
+    }
+
+    // ----- logging and the edge -----------------------------------------------------------
+
+    /// Logs `msg`. Warnings, discards, errors and fatal errors always go out: a function that
+    /// returns one of them has called the logger (FMI 2.0.4, §2.1.3, the meaning of
+    /// fmi2Warning and of the statuses above it), and debug logging (`loggingOn`) concerns
+    /// the other messages, which go out only when their category is on.
+    pub fn log(&mut self, status: Status, msg: &str) {
+        let category = status.category();
+        let always = status >= Status::Warning;
+        let k = LOG_CATEGORIES.iter().position(|(c, _)| *c == category).unwrap_or(0);
+        if always || self.logging.0[k] {
+            (self.log)(status, category, msg);
+        }
+    }
+
+    /// Logs each note as a warning from `func`; the status: Warning if there was one.
+    pub(crate) fn notes(&mut self, func: Func, notes: Notes) -> Status {
+        let status = if notes.is_empty() { Status::Ok } else { Status::Warning };
+        for note in notes {
+            self.log(Status::Warning, &format!("{func}: {note}"));
+        }
+        status
+    }
+
+    /// The one place where a result becomes an FMI status: a failure is logged with its
+    /// message and returns its status.
+    #[inline]
+    pub fn edge<T>(&mut self, result: FmiResult<T>) -> Result<T, Status> {
+        result.map_err(|e| self.failed(e))
+    }
+
+    /// The failure of [`edge`](Self::edge), out of the calls' fast path.
+    #[cold]
+    #[inline(never)]
+    fn failed(&mut self, e: FmiError) -> Status {
+        self.log(e.status, &e.message);
+        e.status
+    }
+
+    /// [`edge`](Self::edge) for calls that return a status only.
+    #[inline]
+    pub(crate) fn status(&mut self, result: FmiResult) -> Status {
+        self.edge(result).unwrap_or_else(|status| status)
+    }
+
+    /// Logs a call (see [`trace!`]).
+    pub(crate) fn trace(&mut self, msg: fmt::Arguments<'_>) {
+        if self.logging.0[LOG_CALLS] {
+            (self.log)(Status::Ok, "logCalls", &msg.to_string());
+        }
+    }
+
+    /// Traces an FMU-state call with the instance's state and time afterwards.
+    fn trace_state(&mut self, what: fmt::Arguments<'_>) {
+        let (state, t) = (self.core.state, self.core.time);
+        trace!(self, "{what}: state `{}`, t = {t:?}", state.name());
+    }
+
+    /// FreeInstance: traces the call; the caller then drops the instance. Allowed in every
+    /// state, fatal included: freeing touches no model data, and a host that frees a fatal
+    /// instance (which FMI 2.0 does not ask of it) should not leak it.
+    pub fn trace_free(&mut self) {
+        if self.logging.0[LOG_CALLS] {
+            let msg = format!("{}: instance `{}`", self.func("FreeInstance"), self.name);
+            (self.log)(Status::Ok, "logCalls", &msg);
+        }
+    }
+
+    /// Refuses every call on a fatal instance before the call touches anything (its
+    /// arguments included): logs the illegal call and returns false.
+    #[inline]
+    pub fn check_not_fatal(&mut self, func: &str) -> bool {
+        let allowed = self.allowed(func, mask::ANY_BUT_FATAL);
+        self.edge(allowed).is_ok()
+    }
+
+    /// Whether `func` may be called in the current state.
+    #[inline]
+    pub(crate) fn allowed(&self, func: impl fmt::Display, mask: u32) -> FmiResult<()> {
+        let state = self.core.state;
+        if mask & state.bit() != 0 {
+            return Ok(());
+        }
+        Err(illegal(func, state))
+    }
+
+    /// SetDebugLogging. `categories`: `None` where the host passed NULL or invalid UTF-8.
+    /// An empty list switches every category.
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[Option<&str>]) -> Status {
+        let r = self.try_set_debug_logging(on, categories);
+        self.status(r)
+    }
+
+    fn try_set_debug_logging(&mut self, on: bool, categories: &[Option<&str>]) -> FmiResult {
+        let f = self.func("SetDebugLogging");
+        self.allowed(f, mask::ANY_BUT_FATAL)?;
+        let mut flags = self.logging;
+        if categories.is_empty() {
+            flags.0 = [on; LOG_CATEGORIES.len()];
+        }
+        for c in categories {
+            let Some(k) = c.and_then(|c| LOG_CATEGORIES.iter().position(|(n, _)| *n == c)) else {
+                let names: Vec<&str> = LOG_CATEGORIES.iter().map(|(n, _)| *n).collect();
+                return Err(FmiError::error(format!(
+                    "{f}: unknown log category {c:?}: must be one of {}",
+                    names.join(", ")
+                )));
+            };
+            if LOG_CATEGORIES[k].0 == "logAll" {
+                flags.0 = [on; LOG_CATEGORIES.len()];
+            } else {
+                flags.0[k] = on;
+            }
+        }
+        self.logging = flags;
+        trace!(self, "{f}: loggingOn = {on}, categories {categories:?}");
+        Ok(Status::Ok)
+    }
+
+    // ----- lifecycle ----------------------------------------------------------------------
+
+    /// SetupExperiment.
+    pub fn setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Status {
+        let r = self.try_setup_experiment(tolerance, start_time, stop_time);
+        self.status(r)
+    }
+
+    fn try_setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> FmiResult {
+        let f = self.func("SetupExperiment");
+        self.allowed(f, mask::INSTANTIATED)?;
+        if let Some(tol) = tolerance {
+            M::check_tolerance(tol).map_err(|allowed| {
+                FmiError::error(format!(
+                    "{f}: tolerance = {tol:?} is out of range: must be {allowed}"
+                ))
+            })?;
+        }
+        if !start_time.is_finite() {
+            return Err(FmiError::error(format!(
+                "{f}: startTime = {start_time} is out of range: must be finite"
+            )));
+        }
+        if let Some(stop) = stop_time {
+            if !(stop.is_finite() && stop >= start_time) {
+                return Err(FmiError::error(format!(
+                    "{f}: stopTime = {stop} is out of range: must be finite and \
+                     >= startTime = {start_time}"
+                )));
+            }
+        }
+        let setup = Setup { tolerance, start_time, stop_time };
+        self.core.setup = setup;
+        self.core.time = start_time;
+        self.core.last_successful_time = start_time;
+        trace!(self, "{f}: {setup:?}");
+        Ok(Status::Ok)
+    }
+
+    /// EnterInitializationMode.
+    pub fn enter_initialization_mode(&mut self) -> Status {
+        let f = self.func("EnterInitializationMode");
+        let r = self.allowed(f, mask::INSTANTIATED).map(|()| {
+            self.core.state = State::InitializationMode;
+            trace!(self, "{f}: state `initialization mode`");
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// ExitInitializationMode: the model checks all its values together and starts. A
+    /// failure puts the instance in the error state.
+    pub fn exit_initialization_mode(&mut self) -> Status {
+        let r = self.try_exit_initialization_mode();
+        self.status(r)
+    }
+
+    fn try_exit_initialization_mode(&mut self) -> FmiResult {
+        let f = self.func("ExitInitializationMode");
+        self.allowed(f, mask::INITIALIZATION)?;
+        let setup = self.core.setup;
+        if let Err(msg) = self.core.model.start(&setup) {
+            self.core.state = State::Error;
+            return Err(FmiError::error(format!("{f}: {msg}")));
+        }
+        let t0 = setup.start_time;
+        self.core.time = t0;
+        self.core.last_successful_time = t0;
+        self.core.terminated = false;
+        self.core.state = State::StepComplete;
+        trace!(self, "{f}: integrator started at t = {t0:?}");
+        Ok(Status::Ok)
+    }
+
+    /// Terminate.
+    pub fn terminate(&mut self) -> Status {
+        let f = self.func("Terminate");
+        let r = self.allowed(f, mask::TERMINATE).map(|()| {
+            self.core.state = State::Terminated;
+            let t = self.core.time;
+            trace!(self, "{f}: at t = {t:?}");
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// Reset: back to `instantiated` with the start values. Debug-logging settings stay.
+    pub fn reset(&mut self) -> Status {
+        let f = self.func("Reset");
+        let r = self.allowed(f, mask::ANY_BUT_FATAL).map(|()| {
+            self.core = Snapshot::new();
+            trace!(self, "{f}: back to `instantiated` with the start values");
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// Marks the instance fatal after a caught panic: nothing but FreeInstance works
+    /// afterwards.
+    pub fn set_fatal(&mut self, msg: &str) {
+        self.core.state = State::Fatal;
+        self.log(Status::Fatal, msg);
+    }
+
+    // ----- get and set --------------------------------------------------------------------
+
+    /// Finds `vr` and checks it has base type `base`.
+    #[inline]
+    pub(crate) fn lookup(func: Func, vr: u32, base: BaseType) -> FmiResult<&'static VarInfo> {
+        match M::variable(vr) {
+            Some(info) if info.ty.base() == base => Ok(info),
+            found => Err(bad_reference(func, vr, base, found, M::variable_count())),
+        }
+    }
+
+    /// The value of any variable of base type `base`.
+    fn get_value(&mut self, func: Func, vr: u32, base: BaseType) -> FmiResult<Value> {
+        let info = Self::lookup(func, vr, base)?;
+        let setup = self.core.setup;
+        let value = self.core.model.get(vr, &setup).map_err(|msg| {
+            FmiError::error(format!("{func}: the outputs cannot be computed: {msg}"))
+        })?;
+        match value {
+            Value::Real(x) if !x.is_finite() && info.causality == Causality::Output => {
+                Err(FmiError::error(format!(
+                    "{func}: output `{}` is not finite at t = {}",
+                    info.name, self.core.time
+                )))
+            }
+            _ => Ok(value),
+        }
+    }
+
+    /// Gets every value of `vrs` of base type `base` into `out`.
+    pub fn get<T: fmt::Debug>(
+        &mut self,
+        name: &'static str,
+        base: BaseType,
+        vrs: &[u32],
+        out: &mut [T],
+        convert: impl Fn(Value) -> T,
+    ) -> Status {
+        let f = self.func(name);
+        let r = (|| {
+            self.allowed(f, mask::GET)?;
+            if vrs.len() != out.len() {
+                return Err(FmiError::error(format!(
+                    "{f}: {} value references but {} values",
+                    vrs.len(),
+                    out.len()
+                )));
+            }
+            for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                *slot = convert(self.get_value(f, *vr, base)?);
+            }
+            trace!(self, "{f}: {}", listing::<M, T>(vrs, out));
+            Ok(Status::Ok)
+        })();
+        self.status(r)
+    }
+
+    /// GetString and SetString for a model without string variables: any value reference
+    /// is refused.
+    pub fn no_strings(&mut self, name: &'static str, set: bool, vrs: &[u32]) -> Status {
+        let f = self.func(name);
+        let allowed = if set { mask::SET } else { mask::GET };
+        let r = self.allowed(f, allowed).and_then(|()| match vrs.first() {
+            None => {
+                trace!(self, "{f}: no variables");
+                Ok(Status::Ok)
+            }
+            Some(vr) => Self::lookup(f, *vr, BaseType::String).map(|_| Status::Error),
+        });
+        self.status(r)
+    }
+
+    /// Sets all values or none: each is checked first, against its variable's causality,
+    /// the current state and its range; then all are set.
+    pub fn set<T: Copy + fmt::Debug>(
+        &mut self,
+        name: &'static str,
+        base: BaseType,
+        vrs: &[u32],
+        values: &[T],
+        convert: impl Fn(T) -> Value,
+    ) -> Status {
+        let f = self.func(name);
+        let r = (|| {
+            self.allowed(f, mask::SET)?;
+            if vrs.len() != values.len() {
+                return Err(FmiError::error(format!(
+                    "{f}: {} value references but {} values",
+                    vrs.len(),
+                    values.len()
+                )));
+            }
+            let state = self.core.state;
+            for (vr, value) in vrs.iter().zip(values) {
+                let info = Self::lookup(f, *vr, base)?;
+                let refusal = match info.causality {
+                    Causality::Output => Some("it is an output".to_string()),
+                    Causality::Parameter if state == State::StepComplete => Some(format!(
+                        "it is a fixed parameter, settable only before \
+                         {} (state is `{}`)",
+                        self.func("ExitInitializationMode"),
+                        state.name()
+                    )),
+                    _ => None,
+                };
+                if let Some(why) = refusal {
+                    return Err(FmiError::error(format!("{f}: cannot set `{}`: {why}", info.name)));
+                }
+                // All or none: with several values, each is checked before any is set.
+                if vrs.len() > 1 {
+                    let checked = self.core.model.check(*vr, convert(*value));
+                    checked.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+                }
+            }
+            let mut notes = Notes::new();
+            for (vr, value) in vrs.iter().zip(values) {
+                let set = self.core.model.set(*vr, convert(*value), state, &mut notes);
+                set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+            }
+            trace!(self, "{f}: {}", listing::<M, T>(vrs, values));
+            Ok(self.notes(f, notes))
+        })();
+        self.status(r)
+    }
+
+    /// GetReal.
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Status {
+        self.get("GetReal", BaseType::Real, vrs, out, Value::real)
+    }
+
+    /// GetInteger (integers and enumerations).
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
+        self.get("GetInteger", BaseType::Integer, vrs, out, Value::integer)
+    }
+
+    /// GetBoolean.
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [bool]) -> Status {
+        self.get("GetBoolean", BaseType::Boolean, vrs, out, Value::boolean)
+    }
+
+    /// GetString, for a model without string variables.
+    pub fn get_string(&mut self, vrs: &[u32]) -> Status {
+        self.no_strings("GetString", false, vrs)
+    }
+
+    /// SetReal.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        self.set("SetReal", BaseType::Real, vrs, values, Value::Real)
+    }
+
+    /// SetInteger (integers and enumerations).
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        self.set("SetInteger", BaseType::Integer, vrs, values, Value::Integer)
+    }
+
+    /// SetBoolean.
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
+        self.set("SetBoolean", BaseType::Boolean, vrs, values, Value::Boolean)
+    }
+
+    /// SetString, for a model without string variables.
+    pub fn set_string(&mut self, vrs: &[u32]) -> Status {
+        self.no_strings("SetString", true, vrs)
+    }
+
+    // ----- FMU state ----------------------------------------------------------------------
+
+    /// GetFMUstate: a copy of everything but the name and logger.
+    pub fn get_state(&mut self) -> Result<Box<Snapshot<M>>, Status> {
+        let f = self.func("GetFMUstate");
+        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+            self.trace_state(format_args!("{f}: new snapshot"));
+            Box::new(self.core.clone())
+        });
+        self.edge(r)
+    }
+
+    /// GetFMUstate into an existing snapshot, reusing its memory.
+    pub fn get_state_into(&mut self, snapshot: &mut Snapshot<M>) -> Status {
+        let f = self.func("GetFMUstate");
+        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+            snapshot.clone_from(&self.core);
+            self.trace_state(format_args!("{f}: into the existing snapshot"));
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// SetFMUstate.
+    pub fn set_state(&mut self, snapshot: &Snapshot<M>) -> Status {
+        let f = self.func("SetFMUstate");
+        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+            self.core.clone_from(snapshot);
+            self.trace_state(format_args!("{f}: restored"));
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// Checks that FreeFMUstate may be called (it may, in every state but fatal). `is_null`:
+    /// the host passed a pointer to NULL, so there is nothing to free.
+    pub fn check_free_state(&mut self, is_null: bool) -> Status {
+        let f = self.func("FreeFMUstate");
+        let r = self.allowed(f, mask::ANY_BUT_FATAL).map(|()| {
+            let what = if is_null { "NULL, nothing to free" } else { "a snapshot" };
+            trace!(self, "{f}: {what}");
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// SerializeFMUstate: the byte form of a snapshot ([`snapshot`] documents the format).
+    pub fn serialize(&mut self, snapshot: &Snapshot<M>) -> Result<Vec<u8>, Status> {
+        let f = self.func("SerializeFMUstate");
+        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+            let bytes = snapshot::serialize(snapshot);
+            trace!(self, "{f}: {} bytes", bytes.len());
+            bytes
+        });
+        self.edge(r)
+    }
+
+    /// SerializedFMUstateSize.
+    pub fn serialized_size(&mut self, snapshot: &Snapshot<M>) -> Result<usize, Status> {
+        let f = self.func("SerializedFMUstateSize");
+        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+            let n = snapshot::serialize(snapshot).len();
+            trace!(self, "{f}: {n} bytes");
+            n
+        });
+        self.edge(r)
+    }
+
+    /// DeSerializeFMUstate: a snapshot from untrusted bytes. Every field is checked;
+    /// malformed bytes give an error that says what is wrong.
+    pub fn deserialize(&mut self, bytes: &[u8]) -> Result<Box<Snapshot<M>>, Status> {
+        let f = self.func("DeSerializeFMUstate");
+        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).and_then(|()| {
+            let core = snapshot::deserialize::<M>(bytes)
+                .map(Box::new)
+                .map_err(|e| FmiError::error(format!("{f}: {e}")))?;
+            let n = bytes.len();
+            trace!(self, "{f}: {n} bytes, a snapshot in state `{}`", core.state.name());
+            Ok(core)
+        });
+        self.edge(r)
+    }
+}
+
+#[cold]
+#[inline(never)]
+fn illegal(func: impl fmt::Display, state: State) -> FmiError {
+    FmiError::error(format!(
+        "{func}: illegal call sequence: not allowed in state `{}`",
+        state.name()
+    ))
+}
+
+#[cold]
+#[inline(never)]
+fn bad_reference(
+    func: Func,
+    vr: u32,
+    base: BaseType,
+    found: Option<&VarInfo>,
+    count: usize,
+) -> FmiError {
+    FmiError::error(match found {
+        None => format!("{func}: unknown value reference {vr}: must be below {count}"),
+        Some(info) => format!(
+            "{func}: value reference {vr} is `{}`, a {:?} variable, not a {base:?}",
+            info.name,
+            info.ty.base()
+        ),
+    })
+}

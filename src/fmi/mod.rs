@@ -1,0 +1,32 @@
+//! The generic FMI core: what every FMI interface of a model shares, knowing the model only
+//! through the traits of [`model`].
+//!
+//! - [`description`]: the types that describe an interface (variables, units, flags).
+//! - [`model`]: the traits a model implements ([`Model`], [`CoSimulation`]), and the values
+//!   that cross them.
+//! - `machine`: the states, the masks of allowed calls, the statuses and the error that
+//!   carries a status to the edge.
+//! - `instance`: one instance: logging, the lifecycle, get and set by value reference, FMU
+//!   state snapshots. `cosim`: the co-simulation calls.
+//! - `snapshot`: what an FMU state holds, and its byte format.
+//!
+//! No `unsafe` and no I/O: an interface layer (`crate::fmi2`) turns the C calls into calls
+//! of [`Instance`], and the errors into C statuses once, at its edge.
+#![forbid(unsafe_code)]
+
+mod cosim;
+pub mod description;
+mod instance;
+mod machine;
+pub mod model;
+mod snapshot;
+
+pub use cosim::{STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_PENDING, STATUS_TERMINATED};
+pub use description::{BaseType, VarInfo, LOG_CATEGORIES};
+pub use instance::{Func, Instance, Logger};
+pub use machine::{FmiError, FmiResult, State, Status};
+pub use model::{CoSimulation, Model, Notes, Restore, Setup, StepFailure, Value};
+pub use snapshot::{
+    deserialize, field_offsets, reseal, reseal_checksum, same_time, serialize, version,
+    visit_optional, Snapshot, CORE_VERSION, HEADER,
+};

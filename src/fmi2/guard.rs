@@ -1,0 +1,141 @@
+//! The edge of every exported function: the panic guard, and C pointers turned into slices
+//! and strings (NULL only where the count is 0). The get and set functions share one shape,
+//! written once here.
+#![allow(unsafe_code)]
+#![deny(unsafe_op_in_unsafe_fn)]
+
+use super::registry::instance;
+use super::types::{fmi2Component, fmi2Status, fmi2String, fmi2ValueReference};
+use super::Instance;
+use crate::fmi::Status;
+use std::ffi::CStr;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic".to_string()
+    }
+}
+
+/// Runs `body` on the instance behind `c`. NULL or unknown `c` gives fmi2Error (there is no
+/// logger to tell). A panic is caught, logged, and makes the instance fatal.
+///
+/// A fatal instance refuses every call here, before `body` looks at any argument, with
+/// fmi2Error and an "illegal call sequence" message: FMI 2.0 (§2.1.3, fmi2Fatal) allows no
+/// further call, and the host already got fmi2Fatal from the call that panicked.
+pub(super) fn guard(
+    c: fmi2Component,
+    func: &str,
+    body: impl FnOnce(&mut Instance) -> Status,
+) -> fmi2Status {
+    // SAFETY: see `instance`.
+    let Some(inst) = (unsafe { instance(c) }) else {
+        return Status::Error as fmi2Status;
+    };
+    if !inst.check_not_fatal(func) {
+        return Status::Error as fmi2Status;
+    }
+    match catch_unwind(AssertUnwindSafe(|| body(inst))) {
+        Ok(status) => status as fmi2Status,
+        Err(payload) => {
+            let msg = format!("{func}: internal error (panic): {}", panic_text(&*payload));
+            let _ = catch_unwind(AssertUnwindSafe(|| {
+                // SAFETY: the borrow inside `body` ended with the unwind.
+                if let Some(inst) = unsafe { instance(c) } {
+                    inst.set_fatal(&msg);
+                }
+            }));
+            Status::Fatal as fmi2Status
+        }
+    }
+}
+
+/// `n` elements at `p`: an empty slice when `n` is 0 (whatever `p`), `None` for NULL or a
+/// misaligned pointer.
+///
+/// # Safety
+/// A non-NULL `p` must point to `n` valid elements, as the FMI caller guarantees.
+pub(super) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        return Some(&[]);
+    }
+    if p.is_null() || !p.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return None;
+    }
+    // SAFETY: non-NULL, aligned, and the caller guarantees n valid elements.
+    Some(unsafe { std::slice::from_raw_parts(p, n) })
+}
+
+/// Mutable counterpart of [`slice`].
+pub(super) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        return Some(&mut []);
+    }
+    if p.is_null() || !p.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return None;
+    }
+    // SAFETY: non-NULL, aligned, and the caller guarantees n valid elements.
+    Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
+}
+
+/// A C string as UTF-8; `None` for NULL or invalid UTF-8.
+pub(super) unsafe fn text<'a>(s: fmi2String) -> Option<&'a str> {
+    if s.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL, and the caller guarantees a NUL-terminated string.
+    unsafe { CStr::from_ptr(s) }.to_str().ok()
+}
+
+pub(super) fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> Status {
+    inst.log(
+        Status::Error,
+        &format!("{func}: argument `{arg}` is NULL (or misaligned) with {n} elements"),
+    );
+    Status::Error
+}
+
+/// The shape of the get functions: `body` gets the value references and the values as
+/// slices of `nvr` elements.
+///
+/// # Safety
+/// `vr` and `value` hold `nvr` elements, as the FMI caller guarantees.
+pub(super) unsafe fn get_values<T>(
+    c: fmi2Component,
+    func: &str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut T,
+    body: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> Status,
+) -> fmi2Status {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
+        (Some(vr), Some(value)) => body(inst, vr, value),
+        (None, _) => null_arg(inst, func, "vr", nvr),
+        (_, None) => null_arg(inst, func, "value", nvr),
+    })
+}
+
+/// The shape of the set functions: [`get_values`] with values to read.
+///
+/// # Safety
+/// `vr` and `value` hold `nvr` elements, as the FMI caller guarantees.
+pub(super) unsafe fn set_values<T>(
+    c: fmi2Component,
+    func: &str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const T,
+    body: impl FnOnce(&mut Instance, &[u32], &[T]) -> Status,
+) -> fmi2Status {
+    // SAFETY: each pointer holds `nvr` elements (the function's contract).
+    guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
+        (Some(vr), Some(value)) => body(inst, vr, value),
+        (None, _) => null_arg(inst, func, "vr", nvr),
+        (_, None) => null_arg(inst, func, "value", nvr),
+    })
+}

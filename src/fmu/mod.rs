@@ -1,0 +1,339 @@
+//! The beam–body model as an FMU: its variables ([`variables`]), their values
+//! ([`values`]) and outputs ([`outputs`]), bound to the FMI core through [`fmi::Model`] and
+//! [`fmi::CoSimulation`]. The only place that knows both the FMI core and the model; the
+//! core knows the model only through these traits.
+//!
+//! A run is started the one way the CLI starts one ([`Run::start`]) on the same settings
+//! ([`Scene`](crate::scene::Scene)), with the experiment's tolerance.
+#![forbid(unsafe_code)]
+
+pub mod outputs;
+#[cfg(test)]
+mod tests;
+pub mod values;
+pub mod variables;
+
+use crate::fmi::{self, Notes, Restore, Setup, State, StepFailure, Value};
+use crate::model::{BeamBody, Kinematics};
+use crate::scene::PhiSource;
+use crate::sim::Run;
+use crate::solver::check_rtol;
+use crate::visit::StateVisitor;
+use outputs::{Cache, Group};
+use values::Values;
+use variables::{Var, Variable, DEFAULT_EXPERIMENT, VARIABLES};
+
+/// Most internal steps in one DoStep, so that a step always returns in bounded time (about
+/// a second in a release build); beyond it the step is discarded with a message. The
+/// stiffest scene of the sweep (EI × 10⁷) needs about 5·10⁴ steps per simulated second.
+pub const MAX_STEPS_PER_DO_STEP: u64 = 1_000_000;
+
+/// Version of the model's part of a serialized state; bump it when `visit_state` changes.
+const STATE_VERSION: u32 = 1;
+
+/// The beam–body FMU's model: the values, the run from ExitInitializationMode on, the
+/// outputs computed at the current time, and what the host has been told about φ.
+#[derive(Clone, Debug)]
+pub struct BeamBodyFmu {
+    pub values: Values,
+    /// The integrator, from ExitInitializationMode on.
+    pub run: Option<Run>,
+    cache: Cache,
+    phi: PhiNotes,
+}
+
+/// The host's use of the input φ, for the warnings that say what a run really does. Not
+/// part of a serialized state.
+#[derive(Clone, Copy, Debug, Default)]
+struct PhiNotes {
+    /// The host has set φ since instantiation or reset.
+    set: bool,
+    /// Told that φ is ignored (`phi_source` = law).
+    told_ignored: bool,
+    /// Told that φ was never set (`phi_source` = input).
+    told_unset: bool,
+}
+
+fn row(vr: u32) -> &'static Variable {
+    &VARIABLES[vr as usize]
+}
+
+impl BeamBodyFmu {
+    /// A fresh run at the start time, after checking every parameter together: the CLI's
+    /// [`Run::start`] on the FMU's settings, with the experiment's tolerance.
+    fn build_run(&self, setup: &Setup) -> Result<Run, String> {
+        let mut scene = self.values.settings.clone();
+        scene.solver.rtol = setup.tolerance.unwrap_or(DEFAULT_EXPERIMENT.tolerance);
+        let t0 = setup.start_time;
+        let first = crate::model::Sample { t: t0, ..self.values.input };
+        Run::start(&scene, t0, first, MAX_STEPS_PER_DO_STEP).map_err(|e| e.to_string())
+    }
+
+    /// The motion at the current time, computed now if it is not cached.
+    fn kinematics(&mut self, setup: &Setup) -> Result<Kinematics, String> {
+        if let Some(k) = self.cache.kinematics {
+            return Ok(k);
+        }
+        let k = match &self.run {
+            Some(run) => run.kinematics_at(run.t()).map_err(|e| e.to_string())?,
+            // Initialization mode: the outputs of the start state.
+            None => {
+                let run = self.build_run(setup)?;
+                run.kinematics_at(setup.start_time).map_err(|e| e.to_string())?
+            }
+        };
+        self.cache.kinematics = Some(k);
+        Ok(k)
+    }
+
+    /// The model the outputs are computed with.
+    fn model(&self) -> Result<BeamBody, String> {
+        match &self.run {
+            Some(run) => Ok(*run.model()),
+            None => BeamBody::new(self.values.settings.params).map_err(|e| e.to_string()),
+        }
+    }
+
+    /// The value of output `var` at the current time, its group computed if needed.
+    fn output(&mut self, var: Var, setup: &Setup) -> Result<f64, String> {
+        let k = self.kinematics(setup)?;
+        Ok(match outputs::group(var).expect("only outputs come here") {
+            Group::Motion => outputs::motion(var, &k).expect("a motion output"),
+            Group::Reactions => {
+                let r = match self.cache.reactions {
+                    Some(r) => r,
+                    None => k.reactions(&self.model()?),
+                };
+                self.cache.reactions = Some(r);
+                outputs::reaction(var, &r).expect("a reaction output")
+            }
+            Group::Energy => {
+                let e = match self.cache.energy {
+                    Some(e) => e,
+                    None => k.energy(&self.model()?),
+                };
+                self.cache.energy = Some(e);
+                e
+            }
+        })
+    }
+
+    /// After the host set φ: with `phi_source = law` the law drives the body and φ is not
+    /// used. A host that sends φ between steps is driving it, and is told so once (a host
+    /// that sets every input's start value before the run is not).
+    fn phi_used(&mut self, state: State, notes: &mut Notes) {
+        self.phi.set = true;
+        let law = self.values.settings.phi_source == PhiSource::Law;
+        if !law || state != State::StepComplete || self.phi.told_ignored {
+            return;
+        }
+        self.phi.told_ignored = true;
+        notes.push(format!(
+            "the input `phi` is ignored: `phi_source` = law ({}), so the built-in law turns \
+             the body; set `phi_source` = input ({}) before initialization to drive phi \
+             (said once)",
+            PhiSource::Law as i32 + 1,
+            PhiSource::Input as i32 + 1
+        ));
+    }
+
+    /// Before a step with `phi_source` = input: a host that has never set φ runs the model
+    /// at φ's start value, the body never turning, which is rarely what it means (FMPy's
+    /// `simulate_fmu` without an input does so). It is told once.
+    fn check_phi_sent(&mut self, notes: &mut Notes) {
+        let input = self.values.settings.phi_source == PhiSource::Input;
+        if !input || self.phi.set || self.phi.told_unset {
+            return;
+        }
+        self.phi.told_unset = true;
+        notes.push(format!(
+            "the input `phi` has not been set, so it stays at {:?} rad and the body does not \
+             turn; set `phi` at every communication point, or set `phi_source` = law ({}) \
+             for the paper's turn (said once)",
+            self.values.input.phi,
+            PhiSource::Law as i32 + 1
+        ));
+    }
+
+    /// The parameters in the order of the settings table, the input and its pending
+    /// derivatives; checked with the same rules as the setters.
+    fn visit_values(&mut self, v: &mut impl StateVisitor) -> Result<(), String> {
+        use crate::settings::{Value as S, SETTINGS};
+        let values = &mut self.values;
+        for setting in SETTINGS.iter().filter(|s| s.appears.fmu) {
+            let mut value = values.settings.get(setting.key);
+            match &mut value {
+                S::Real(x) => v.real(setting.name, x),
+                S::Integer(k) => {
+                    let mut c = *k as u64;
+                    v.count(setting.name, &mut c);
+                    *k = i64::try_from(c).unwrap_or(-1);
+                }
+                S::Choice(k) => {
+                    let mut c = *k as u64;
+                    v.count(setting.name, &mut c);
+                    *k = usize::try_from(c).unwrap_or(usize::MAX);
+                }
+                S::Bool(b) => v.flag(setting.name, b),
+            }
+            values.settings.set(setting.key, value).map_err(|e| format!("field {e}"))?;
+        }
+        let input = &mut values.input;
+        v.real("phi", &mut input.phi);
+        values::check_phi(input.phi).map_err(|e| format!("field {e}"))?;
+        fmi::visit_optional(v, "pending_dphi_set", "pending_dphi", &mut input.dphi)?;
+        fmi::visit_optional(v, "pending_ddphi_set", "pending_ddphi", &mut input.ddphi)?;
+        if [input.dphi, input.ddphi].iter().flatten().any(|x| !x.is_finite()) {
+            return Err("field `pending` holds a non-finite derivative".into());
+        }
+        Ok(())
+    }
+}
+
+impl fmi::Model for BeamBodyFmu {
+    const STATE_VERSION: u32 = STATE_VERSION;
+
+    fn variable(vr: u32) -> Option<&'static fmi::VarInfo> {
+        VARIABLES.get(vr as usize).map(|v| &v.info)
+    }
+
+    fn variable_count() -> usize {
+        VARIABLES.len()
+    }
+
+    fn guid() -> &'static str {
+        variables::guid()
+    }
+
+    fn new() -> Self {
+        BeamBodyFmu {
+            values: Values::from_table(),
+            run: None,
+            cache: Cache::default(),
+            phi: PhiNotes::default(),
+        }
+    }
+
+    fn check_tolerance(tol: f64) -> Result<(), String> {
+        check_rtol(tol).map_err(str::to_string)
+    }
+
+    fn get(&mut self, vr: u32, setup: &Setup) -> Result<Value, String> {
+        let var = row(vr);
+        match self.values.get(var) {
+            Some(v) => Ok(v),
+            None => self.output(var.var, setup).map(Value::Real),
+        }
+    }
+
+    fn check(&self, vr: u32, value: Value) -> Result<(), String> {
+        self.values.check(row(vr), value)
+    }
+
+    fn set(
+        &mut self,
+        vr: u32,
+        value: Value,
+        state: State,
+        notes: &mut Notes,
+    ) -> Result<(), String> {
+        let var = row(vr);
+        self.values.set(var, value)?;
+        self.cache = Cache::default();
+        if var.var == Var::Phi {
+            self.phi_used(state, notes);
+        }
+        Ok(())
+    }
+
+    fn start(&mut self, setup: &Setup) -> Result<(), String> {
+        let run = self.build_run(setup)?;
+        self.values.input.dphi = None;
+        self.values.input.ddphi = None;
+        self.run = Some(run);
+        self.cache = Cache::default();
+        Ok(())
+    }
+
+    fn visit_state<V: StateVisitor>(&mut self, v: &mut V, at: &Restore) -> Result<(), String> {
+        self.visit_values(v)?;
+        if let Some(tol) = at.setup.tolerance {
+            if let Err(allowed) = check_rtol(tol) {
+                return Err(format!(
+                    "field `tolerance` = {tol:?} is out of range: must be {allowed}"
+                ));
+            }
+        }
+        let mut has_run = self.run.is_some();
+        v.flag("run", &mut has_run);
+        let needs_run =
+            matches!(at.state, State::StepComplete | State::StepFailed | State::Terminated);
+        let may_run = needs_run || at.state == State::Error;
+        if has_run != needs_run && !(has_run && may_run) {
+            return Err(format!("field `run` = {has_run} contradicts the state `{:?}`", at.state));
+        }
+        if !has_run {
+            self.run = None;
+            return Ok(());
+        }
+        if self.run.is_none() {
+            self.run =
+                Some(self.build_run(&at.setup).map_err(|e| format!("the saved parameters: {e}"))?);
+        }
+        let run = self.run.as_mut().expect("built above");
+        run.visit_state(v);
+        run.check_state()?;
+        // After every step, successful or not, the communication time and the integrator's
+        // time agree (up to the rounding of tc + h).
+        if !fmi::same_time(run.t(), at.time, 1.0) {
+            return Err(format!(
+                "field `integrator time` = {} does not match `time` = {}",
+                run.t(),
+                at.time
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl fmi::CoSimulation for BeamBodyFmu {
+    const MAX_OUTPUT_DERIVATIVE_ORDER: i32 = outputs::MAX_OUTPUT_DERIVATIVE_ORDER;
+    const MAX_INPUT_DERIVATIVE_ORDER: i32 = 2;
+
+    fn do_step(&mut self, from: f64, to: f64, notes: &mut Notes) -> Result<(), StepFailure> {
+        self.check_phi_sent(notes);
+        let sample = crate::model::Sample { t: from, ..self.values.input };
+        self.values.input.dphi = None;
+        self.values.input.ddphi = None;
+        self.cache = Cache::default();
+        let run = self.run.as_mut().expect("a started model has a run");
+        run.set_sample(sample);
+        if let Err(e) = run.step_to(to) {
+            return Err(StepFailure { t: run.t(), message: e.to_string() });
+        }
+        notes.extend(run.take_warning());
+        Ok(())
+    }
+
+    fn set_input_derivative(&mut self, vr: u32, order: i32, value: f64) {
+        debug_assert_eq!(vr, Var::Phi.vr(), "the one input");
+        let slot =
+            if order == 1 { &mut self.values.input.dphi } else { &mut self.values.input.ddphi };
+        *slot = Some(value);
+        self.cache = Cache::default();
+    }
+
+    fn output_derivative(
+        &mut self,
+        vr: u32,
+        order: i32,
+        setup: &Setup,
+    ) -> Result<Option<f64>, String> {
+        let k = self.kinematics(setup)?;
+        Ok(outputs::derivative(row(vr).var, order, &k))
+    }
+
+    fn outputs_with_derivatives(order: i32) -> &'static str {
+        outputs::with_derivatives(order)
+    }
+}
