@@ -163,5 +163,17 @@ def main(argv=None) -> int:
     return 0
 
 
+def entry() -> None:
+    """The command's entry (console script and `python -m`): main, then an exit that skips the
+    interpreter's teardown. pyarrow's native thread pools, used from Dask's worker threads,
+    can abort the process at teardown ("terminate called without an active exception", exit
+    -6) after the work is done and written (apache/arrow#34314): seen once in CI on the Dask
+    engine. Everything the tool writes is closed before main returns."""
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    entry()

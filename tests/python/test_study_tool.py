@@ -149,7 +149,7 @@ def test_pyproject_names_the_package_and_its_dependencies():
     deps = {re.split(r"[<>=!~ ;]", d, maxsplit=1)[0] for d in meta["dependencies"]}
     assert deps == {"numpy", "pandas", "pyarrow", "matplotlib", "dask", "distributed"}
     assert all(">=" in d for d in meta["dependencies"]), meta["dependencies"]
-    assert meta["scripts"]["beam-body-study"] == "beam_body_study.__main__:main"
+    assert meta["scripts"]["beam-body-study"] == "beam_body_study.__main__:entry"
     assert importlib.metadata.version("pandas")  # in the test venv too
 
 

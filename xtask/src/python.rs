@@ -9,7 +9,9 @@ use crate::{project_root, relative, run_cmd, target_dir, Result};
 /// Makes sure `target/venv` exists and has the requirements installed; returns its python.
 ///
 /// Pip runs only when the requirements changed since the last successful install: the
-/// hash of `tests/requirements.txt` is kept in `target/venv/.requirements-hash`.
+/// hash of `tests/requirements.txt` and of `python/pyproject.toml` (the study tool, which
+/// the requirements install; its console script comes from there) is kept in
+/// `target/venv/.requirements-hash`.
 pub fn ensure_venv() -> Result<PathBuf> {
     let venv = target_dir().join("venv");
     let python = venv.join("bin").join("python");
@@ -18,8 +20,13 @@ pub fn ensure_venv() -> Result<PathBuf> {
     }
 
     let requirements = project_root().join("tests").join("requirements.txt");
-    let content = fs::read(&requirements)
-        .map_err(|err| format!("cannot read {}: {err}", relative(&requirements)))?;
+    let pyproject = project_root().join("python").join("pyproject.toml");
+    let mut content = Vec::new();
+    for file in [&requirements, &pyproject] {
+        let bytes =
+            fs::read(file).map_err(|err| format!("cannot read {}: {err}", relative(file)))?;
+        content.extend_from_slice(&bytes);
+    }
     let hash = format!("{:016x}", beam_body::hash::fnv1a_64(&content));
     let stamp = venv.join(".requirements-hash");
     if fs::read_to_string(&stamp).is_ok_and(|old| old.trim() == hash) {
