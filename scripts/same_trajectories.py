@@ -6,7 +6,8 @@ refactoring changed no result.
 
 FMU: FMPy runs of every formulation with the law, and with the input fed from the law's values
 and derivatives (phi_source = input), at two tolerances; every output at every communication
-point must be equal as doubles. CLI: `simulate` on the regression scenes, stdout byte for byte.
+point must be equal as doubles. CLI: `simulate` on the regression scenes and the first 200 cases of each example study, stdout
+byte for byte.
 Exit code 0 when all agree, 1 with the first difference otherwise.
 """
 
@@ -53,6 +54,7 @@ def compare_fmus(old: str, new: str) -> int:
 
 SCENES = [
     [],
+    ["--stiff"],
     ["--formulation", "dae"],
     ["--formulation", "dae_stabilized"],
     ["--formulation", "linear"],
@@ -64,14 +66,19 @@ SCENES = [
 
 
 def compare_clis(old: str, new: str) -> int:
+    runs = []
     for extra in SCENES:
-        args = ["simulate", str(REPO / "scenes" / "paper.toml"), *extra]
+        scene = "stiff.toml" if extra == ["--stiff"] else "paper.toml"
+        runs.append(["simulate", str(REPO / "scenes" / scene), *(e for e in extra if e != "--stiff")])
+    for study in sorted((REPO / "examples").glob("*.toml")):
+        runs.append(["study", str(study), "--cases", "0..200", "--quiet"])
+    for args in runs:
         a = subprocess.run([old, *args], capture_output=True, check=True).stdout
         b = subprocess.run([new, *args], capture_output=True, check=True).stdout
         if a != b:
-            print(f"differ: simulate {' '.join(extra)}")
+            print(f"differ: {' '.join(args)}")
             return 1
-    print(f"{len(SCENES)} CLI scenes: CSV identical byte for byte")
+    print(f"{len(runs)} CLI runs (scenes and study chunks): CSV identical byte for byte")
     return 0
 
 

@@ -1,3 +1,4 @@
+use super::axis::lognormal_mu_sigma;
 use super::*;
 
 fn parse(text: &str) -> Result<Study, String> {

@@ -1,0 +1,142 @@
+//! The modified Newton iteration of a step: the iteration, the Jacobian (analytic or by finite
+//! differences, CVODE cvLsSetup/cvDlsDQJac) and the LU of I − γJ, with their reuse.
+
+use super::*;
+
+impl<const N: usize> Bdf<N> {
+    /// Solves the corrector equation γ·f(t_n, y_n) = z_1/l_1 + Δ for the correction
+    /// Δ = y_n − y_n(predicted) by modified Newton on I − γJ, reusing J and the LU.
+    pub(super) fn newton<S: OdeSystem<N>>(
+        &mut self,
+        sys: &S,
+        mut conv_fail: ConvFail,
+    ) -> Result<(), NewtonFail> {
+        loop {
+            let gamma_ratio = self.derived.gamma_ratio;
+            let needs_setup = self.lu.is_none()
+                || conv_fail != ConvFail::None
+                || self.stats.steps >= self.steps_at_lu + REFACTOR_STEPS
+                || (gamma_ratio - 1.0).abs() > REFACTOR_GAMMA_RATIO;
+            let mut fresh_jac = false;
+            if needs_setup {
+                fresh_jac = !self.jac_valid
+                    || self.stats.steps >= self.steps_at_jac + REJAC_STEPS
+                    || conv_fail == ConvFail::Other
+                    || (conv_fail == ConvFail::BadJacobian
+                        && (gamma_ratio - 1.0).abs() < REJAC_GAMMA_RATIO);
+                if fresh_jac {
+                    self.evaluate_jacobian(sys)?;
+                }
+                self.factor()?;
+            }
+            match self.newton_iterate(sys) {
+                Ok(()) => return Ok(()),
+                Err(NewtonFail::Diverged) if !fresh_jac => conv_fail = ConvFail::BadJacobian,
+                Err(NewtonFail::NonFinite) if !fresh_jac => conv_fail = ConvFail::Other,
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    pub(super) fn newton_iterate<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
+        let lu = self.lu.as_ref().ok_or(NewtonFail::Singular)?;
+        // A stale γ in the LU is corrected by scaling the update (CVODE cvLsSolve for BDF).
+        let NewtonScalars { scale, inv_l1, tol, .. } = self.derived;
+        let mut acor = SVector::<f64, N>::zeros();
+        let mut y = self.zn[0];
+        let mut del2_prev = 0.0;
+        for m in 0..NEWTON_MAX_ITERS {
+            let f = sys.rhs(self.t, &y);
+            self.stats.rhs_evals += 1;
+            self.stats.newton_iters += 1;
+            // A non-finite f needs no test of its own: ±∞ or NaN in f gives ±∞ or NaN in the
+            // residual, the solve carries it into Δ (no product or sum makes it finite again),
+            // and the test of ‖Δ‖ below fails in this same iteration.
+            let residual = f * self.gamma - (self.zn[1] * inv_l1 + acor);
+            let delta = lu.solve(&residual) * scale;
+            acor += delta;
+            y = self.zn[0] + acor;
+            // The tests on squares: no square root on the iteration's chain (the one root
+            // left, of the ratio, is taken from the second iteration on).
+            let del2 = self.wrms_squared(&delta);
+            if !del2.is_finite() {
+                return Err(NewtonFail::NonFinite);
+            }
+            if m > 0 {
+                self.rate = (RATE_DAMPING * self.rate).max((del2 / del2_prev).sqrt());
+            }
+            let damped = self.rate.min(1.0);
+            if del2 * (damped * damped) <= tol * tol {
+                self.acor = acor;
+                return Ok(());
+            }
+            if m > 0 && del2 > DIVERGENCE_RATIO * DIVERGENCE_RATIO * del2_prev {
+                break;
+            }
+            del2_prev = del2;
+        }
+        Err(NewtonFail::Diverged)
+    }
+
+    /// J at the predicted state: analytic if the system has one, else forward differences
+    /// with CVODE's increment rule (cvLsDenseDQJac): σ_j = max(√ε·|y_j|, m_inc/w_j) with
+    /// m_inc = 1000·|h|·ε·N·‖f‖_wrms.
+    pub(super) fn evaluate_jacobian<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
+        let y = self.zn[0];
+        self.stats.jac_evals += 1;
+        self.steps_at_jac = self.stats.steps;
+        let jac = match sys.jacobian(self.t, &y) {
+            Some(j) => j,
+            None => {
+                let f0 = sys.rhs(self.t, &y);
+                self.stats.rhs_evals_jac += 1;
+                if !f0.iter().all(|v| v.is_finite()) {
+                    return Err(NewtonFail::NonFinite);
+                }
+                let fnorm = self.wrms(&f0);
+                let min_inc = if fnorm > 0.0 {
+                    FD_MIN_INC_MULT * self.h.abs() * f64::EPSILON * N as f64 * fnorm
+                } else {
+                    1.0
+                };
+                let sqrt_eps = f64::EPSILON.sqrt();
+                let mut jac = SMatrix::<f64, N, N>::zeros();
+                for j in 0..N {
+                    let inc = (sqrt_eps * y[j].abs()).max(min_inc / self.ewt[j]);
+                    let mut yj = y;
+                    yj[j] += inc;
+                    let fj = sys.rhs(self.t, &yj);
+                    self.stats.rhs_evals_jac += 1;
+                    jac.set_column(j, &((fj - f0) / inc));
+                }
+                jac
+            }
+        };
+        if !all_finite(jac.as_slice()) {
+            self.jac_valid = false;
+            return Err(NewtonFail::NonFinite);
+        }
+        self.jac = jac;
+        self.jac_valid = true;
+        if self.cfg.stability_guard && self.cfg.fixed_step.is_none() {
+            self.guard.update(&self.jac);
+        } else {
+            self.guard.clear();
+        }
+        Ok(())
+    }
+
+    /// LU of I − γJ with the current γ.
+    pub(super) fn factor(&mut self) -> Result<(), NewtonFail> {
+        let m = SMatrix::<f64, N, N>::identity() - self.jac * self.gamma;
+        self.lu = Lu::factor(&m);
+        self.stats.lu_factorizations += 1;
+        self.steps_at_lu = self.stats.steps;
+        self.gamma_lu = self.gamma;
+        self.derive_gamma_ratio();
+        self.rate = 1.0;
+        self.lu.as_ref().map(|_| ()).ok_or(NewtonFail::Singular)
+    }
+
+    // ----- after an accepted step ---------------------------------------------------------
+}

@@ -1,0 +1,167 @@
+//! One case of a study: its parameter values, its run and its metrics.
+
+use super::*;
+
+/// The metrics of one run so far.
+pub(super) struct Accumulator {
+    v1_eq: f64,
+    t_rot: f64,
+    /// `None` until the first output time at or after t_rot.
+    residual: Option<f64>,
+    peak_m: f64,
+    peak_n: f64,
+    peak_p: f64,
+    max_v1: f64,
+    max_theta1: f64,
+    energy: f64,
+}
+
+impl Accumulator {
+    fn new(v1_eq: f64, t_rot: f64) -> Self {
+        Self {
+            v1_eq,
+            t_rot,
+            residual: None,
+            peak_m: 0.0,
+            peak_n: 0.0,
+            peak_p: 0.0,
+            max_v1: 0.0,
+            max_theta1: 0.0,
+            energy: f64::NAN,
+        }
+    }
+
+    /// `f64::max` ignores a NaN operand; a NaN output must reach the metric and fail the row.
+    fn add(&mut self, o: &Outputs) {
+        let max = |acc: f64, x: f64| if x.is_nan() || acc.is_nan() { f64::NAN } else { acc.max(x) };
+        let r = &o.reactions;
+        self.peak_m = max(self.peak_m, r.m.abs());
+        self.peak_n = max(self.peak_n, r.n.abs());
+        self.peak_p = max(self.peak_p, r.p.abs());
+        self.max_v1 = max(self.max_v1, o.v1.abs());
+        self.max_theta1 = max(self.max_theta1, o.theta1.abs());
+        if o.t >= self.t_rot {
+            let d = (o.v1 - self.v1_eq).abs();
+            self.residual = Some(self.residual.map_or(d, |r| max(r, d)));
+        }
+        self.energy = o.energy;
+    }
+
+    fn get(&self, m: Metric) -> f64 {
+        match m {
+            Metric::ResidualV1 => self.residual.unwrap_or(f64::NAN),
+            Metric::PeakM => self.peak_m,
+            Metric::PeakN => self.peak_n,
+            Metric::PeakP => self.peak_p,
+            Metric::MaxV1 => self.max_v1,
+            Metric::MaxTheta1 => self.max_theta1,
+            Metric::EnergyFinal => self.energy,
+        }
+    }
+}
+
+impl Study {
+    /// The parameters' values of case `case` (< [`cases`](Self::cases)). The grids vary in
+    /// the order written, the first slowest; the random samples vary fastest, the same n
+    /// samples at every grid point.
+    pub fn values(&self, case: u64) -> Vec<f64> {
+        assert!(case < self.cases, "case {case} of {}", self.cases);
+        let (mut grid_index, sample) = (case / self.samples, case % self.samples);
+        let mut values = vec![0.0; self.parameters.len()];
+        for (i, p) in self.parameters.iter().enumerate().rev() {
+            if let Some(n) = p.axis.grid_len() {
+                values[i] = p.axis.grid_value(grid_index % n);
+                grid_index /= n;
+            }
+        }
+        for (i, p) in self.parameters.iter().enumerate() {
+            if let Axis::Random(d) = &p.axis {
+                let u = latin_hypercube(self.seed, name_key(&p.name), sample, self.samples);
+                values[i] = d.quantile(u);
+            }
+        }
+        values
+    }
+
+    /// Runs case `case` and computes its metrics. Never fails: see [`Row`].
+    pub fn run_case(&self, case: u64) -> Row {
+        let values = self.values(case);
+        let mut row = Row {
+            case,
+            values: values.clone(),
+            metrics: vec![None; self.metrics.len()],
+            status: Status::Invalid,
+            message: String::new(),
+            steps: 0,
+        };
+        let mut scene = self.base.clone();
+        for (p, &v) in self.parameters.iter().zip(&values) {
+            if let Err(e) = scene.set_number(&p.name, v) {
+                row.message = e;
+                return row;
+            }
+        }
+        // The static deflection residual_v1 is measured from; only that metric needs it.
+        let v1_eq = if self.metrics.contains(&Metric::ResidualV1) {
+            if scene.law.t_rot >= scene.t_end {
+                row.message = format!(
+                    "residual_v1 needs t_end > t_rot, but t_rot = {} and t_end = {}",
+                    scene.law.t_rot, scene.t_end
+                );
+                return row;
+            }
+            let linear = scene.formulation == Formulation::Linear;
+            match BeamBody::new(scene.params).map(|m| m.equilibrium(scene.law.phi_end, linear)) {
+                Ok(Some((v1, _))) => v1,
+                Ok(None) => {
+                    row.status = Status::Failed;
+                    row.message = format!(
+                        "the static equilibrium at phi_end = {} did not converge (residual_v1 \
+                         is measured from it)",
+                        scene.law.phi_end
+                    );
+                    return row;
+                }
+                Err(e) => {
+                    row.message = e.to_string();
+                    return row;
+                }
+            }
+        } else {
+            0.0 // unused; an invalid model is reported by the run
+        };
+        let mut acc = Accumulator::new(v1_eq, scene.law.t_rot);
+        let (report, result) = simulate_partial(&scene, |o| {
+            acc.add(o);
+            std::ops::ControlFlow::Continue(())
+        });
+        row.steps = report.stats.steps;
+        match result {
+            Ok(()) => {
+                (row.status, row.message) = match report.warning {
+                    Some(w) => (Status::Warning, w),
+                    None => (Status::Ok, String::new()),
+                };
+                for (slot, &m) in row.metrics.iter_mut().zip(&self.metrics) {
+                    let value = acc.get(m);
+                    if !value.is_finite() {
+                        row.status = Status::Failed;
+                        row.message = format!("metric `{}` is not finite ({value})", m.name());
+                        row.metrics.fill(None);
+                        return row;
+                    }
+                    *slot = Some(value);
+                }
+            }
+            Err(e) => {
+                row.status = match &e {
+                    SimError::Setting(_) => Status::Invalid,
+                    SimError::Solver(SolverError::OutOfRange { .. }) => Status::Stopped,
+                    SimError::Solver(_) | SimError::Stopped => Status::Failed,
+                };
+                row.message = e.to_string();
+            }
+        }
+        row
+    }
+}
