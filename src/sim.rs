@@ -12,6 +12,7 @@ use crate::model::{
 };
 use crate::scene::grid;
 use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
+use crate::math;
 use crate::visit::StateVisitor;
 use nalgebra::SVector;
 use std::fmt;
@@ -168,11 +169,6 @@ pub struct Run {
     /// ([`Bdf::probe_step`]). Only within one [`step_to`](Self::step_to).
     untested_join: bool,
     bdf: Integrator,
-}
-
-/// Whether two times differ by no more than a few ulps: the round-off of a host's tc + h.
-fn within_rounding(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 16.0 * f64::EPSILON * a.abs().max(b.abs())
 }
 
 /// [`Bdf::advance`], whose first step, with `probe`, is a [`Bdf::probe_step`]: the
@@ -429,7 +425,7 @@ impl Run {
         let bp = law.breakpoint();
         // A stop within rounding of the breakpoint is the breakpoint (a host's tc + h), so the
         // integrator never takes a step of a few ulps after landing on it.
-        let tstop = if within_rounding(tstop, bp) { bp } else { tstop };
+        let tstop = if math::same_time(tstop, bp, 0.0) { bp } else { tstop };
         let tout = tout.min(tstop);
         loop {
             let turning = matches!(self.piece, PhiPiece::Turn(_));
@@ -453,7 +449,7 @@ impl Run {
     /// and the run goes on without the check.
     fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
         loop {
-            if tout > self.t() && within_rounding(tout, self.t()) {
+            if tout > self.t() && math::same_time(tout, self.t(), 0.0) {
                 return Ok(());
             }
             let (model, piece, formulation) = (&self.model, self.piece, self.formulation);

@@ -69,10 +69,7 @@ pub fn version<M: Model>() -> u32 {
     CORE_VERSION * 1000 + M::STATE_VERSION
 }
 
-/// The two times are the same up to the rounding of tc + h: a few ulps of the larger.
-pub fn same_time(a: f64, b: f64, scale: f64) -> bool {
-    (a - b).abs() <= 64.0 * f64::EPSILON * a.abs().max(b.abs()).max(scale)
-}
+pub use crate::math::same_time;
 
 /// Serializes a snapshot.
 pub fn serialize<M: Model>(snapshot: &Snapshot<M>) -> Vec<u8> {
