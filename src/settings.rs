@@ -3,7 +3,7 @@
 //! FMU parameter, a study parameter, a CLI flag where marked).
 //!
 //! Everything else is derived from [`SETTINGS`]: the FMU's parameters and so
-//! `modelDescription.xml` (`fmi2::variables`), [`Scene::default`](crate::scene::Scene) and
+//! `modelDescription.xml` (`fmu::variables`), [`Scene::default`](crate::scene::Scene) and
 //! its `set`, the study's list of parameters, and the CLI's flags and help. A new setting is
 //! a row here and its field in [`Scene`](crate::scene::Scene). No I/O, no `unsafe`.
 #![forbid(unsafe_code)]

@@ -6,13 +6,13 @@
 //! No I/O: rows go to a callback.
 #![forbid(unsafe_code)]
 
+use crate::math;
 use crate::model::{
     BeamBody, DaeSystem, Formulation, HostSignal, Kinematics, Outputs, PaperLaw, Phi, PhiPiece,
     Poly, RangeCheck, Sample, TwoDofSystem,
 };
 use crate::scene::grid;
 use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
-use crate::math;
 use crate::visit::StateVisitor;
 use nalgebra::SVector;
 use std::fmt;

@@ -42,7 +42,7 @@ PHI_END = math.pi
 T_END = 10.2
 H0 = 0.0085
 
-# Enumerations of the modelDescription (src/fmi2/variables.rs).
+# Enumerations of the modelDescription (src/fmu/variables.rs).
 FORMULATION_ENUM = {"reduced": 1, "dae": 2, "dae_stabilized": 3, "linear": 4}
 PHI_SOURCE_LAW = 2  # phi_source: 1 = input (the default), 2 = law
 

@@ -80,7 +80,7 @@ def test_capability_flags_and_default_experiment(fmu_file):
     assert ex is not None
     got = tuple(float(x) for x in (ex.startTime, ex.stopTime, ex.tolerance, ex.stepSize))  # strings in FMPy
     assert got == (0.0, 10.2, 1e-6, 0.0085), f"DefaultExperiment (start, stop, tolerance, step) = {got}"
-    # The variables the other tests use, with their enumerations (src/fmi2/variables.rs).
+    # The variables the other tests use, with their enumerations (src/fmu/variables.rs).
     by_name = {v.name: v for v in md.modelVariables}
     assert by_name["phi"].causality == "input" and by_name["phi"].type == "Real"
     for out in ("v1", "theta1", "u2", "drift", "phi_applied", "dphi_applied", "ddphi_applied"):

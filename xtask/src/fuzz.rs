@@ -223,7 +223,7 @@ fn write_state_seeds(dir: &Path) -> Result {
         }
     };
     // Enumerations count from 1: phi_source input = 1, law = 2; formulation reduced = 1,
-    // dae = 2, dae_stabilized = 3, linear = 4 (fmi2::variables).
+    // dae = 2, dae_stabilized = 3, linear = 4 (fmu::variables).
     let mut inst = new()?;
     seeds.push(snapshot(&mut inst)?);
     ok("phi_source", inst.set_integer(&[Var::PhiSource.vr()], &[2]))?;

@@ -6,36 +6,9 @@
 //! tempfile), libloading and nalgebra, and diffsol with the feature `bench` only (see
 //! Cargo.toml for why each).
 
-// The platform's sin, exp, powf, ... are fine here: xtask computes references, bounds and
-// reports on this machine, while the library uses `beam_body::math` (clippy.toml).
-#![allow(clippy::disallowed_methods)]
-
-mod ab;
-mod bench;
-mod docs;
-mod figures;
-mod fmu;
-mod fuzz;
-mod import;
-mod model_description;
-mod platforms;
-mod profile;
-mod progress;
-mod python;
-mod study;
-mod summary;
-mod sweep;
-mod system;
-mod test;
-mod xml;
-
 use std::env;
-use std::error::Error;
-use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
-use std::process::{Command, ExitCode, ExitStatus};
-
-type Result<T = (), E = Box<dyn Error>> = std::result::Result<T, E>;
+use std::process::ExitCode;
+use xtask::{cargo, fmu, model_description, run_cmd, study, test, Result};
 
 const HELP: &str = "\
 Usage: cargo xtask <command> [options]
@@ -45,7 +18,7 @@ Commands:
           Run the whole test suite: set up the Python venv (target/venv),
           build the release binary, run the Rust tests and the Python tests.
   gen     Write modelDescription/modelDescription.xml from the interface tables
-          (src/fmi2/variables.rs). Commit the result; a test fails when it is stale.
+          (src/fmu/variables.rs). Commit the result; a test fails when it is stale.
   fmu [--all-platforms]
           Build and check the FMU, target/fmu/BeamBody.fmu:
           - refuse a stale modelDescription.xml;
@@ -65,7 +38,7 @@ Commands:
             host, run the same scene through it (target/fmu/paper_fmu.csv) and compare.
   bench [--quick]
           The work-precision benchmark (error against run time, target/bench/):
-          - set up target/venv with xtask/python/requirements-bench.txt, package the
+          - set up target/venv with bench/python/requirements-bench.txt, package the
             FMU, build CVODE 7.1.1 at -O3 from the sundials-sys crate's C sources
             (once; Debian's -O0 libsundials through apt-get only if that fails);
           - write the cases (target/bench/cases.csv): solvers bdf, bdf-fixed, cvode,
@@ -92,7 +65,7 @@ Commands:
           also writes the solutions (target/bench/sol/) and target/bench/costs.csv.
   bench-ab [REV] [--rounds R] [--sample SCENE FORMULATION RTOL]
           The time per step of the library at git revision REV (default HEAD) against
-          the working tree's: a small runner (xtask/ab/runner.rs) built against each
+          the working tree's: a small runner (bench/ab/runner.rs) built against each
           (target/ab/), both run at the same time, one per core, swapping cores and
           start order every round; ten cases (paper, paper-dae, paper-dae-stabilized at
           rtol 1e-4, 1e-6, 1e-8; stiff at 1e-4); the median per case over R rounds
@@ -121,14 +94,14 @@ Commands:
             (15) against (20)+(21) and (16), integration error, small-oscillation
             periods) to target/figures/figure3.txt; fail if (15) and (20)+(21) differ
             by 1e-3 of the scale or more, or (16) from (15) by 0.5 of it or less;
-          - draw docs/figure3.png and docs/model.png (xtask/python/figures.py).
-          The claims are tested by `cargo test -p xtask figures` (run by `test`).
+          - draw docs/figure3.png and docs/model.png (bench/python/figures.py).
+          The claims are tested by `cargo test -p beam-body-bench figures` (run by `test`).
   study ARGS...
           The study tool (python/beam_body_study, README: Design studies) with the
           release CLI, in target/venv: `study run STUDY.toml -o OUT.parquet [--engine
           dask [--scheduler ADDRESS]]`, `study plot heatmap|hist ...`, `study --help`.
   bench-study [--quick]
-          Throughput of the study runners side by side (xtask/python/bench_study.py):
+          Throughput of the study runners side by side (bench/python/bench_study.py):
           a 10^4-case study through the native runner on 1 and 2 threads, the chunked
           local engine, a LocalCluster of 1 and 2 workers and a loopback scheduler with
           2 worker processes; the overhead of a chunk's CLI call; 5 shuffled rounds
@@ -137,7 +110,7 @@ Commands:
           one run of each benchmark scene at rtol 1e-6 (a release build with symbols in
           target/prof), by the source line of each instruction: the integrator, the
           coefficients, the model, sin and cos, log/exp/pow, LU, the guard
-          (xtask/python/profile_step.py); target/prof/profile.md.
+          (bench/python/profile_step.py); target/prof/profile.md.
   setup   Install what the build and the whole suite need beyond Rust and Python:
           the launcher that `cargo xtask` runs first (xtask/launch) installs
           libclang-dev (bindgen in fmi-sys) when libclang is missing; then the Debian
@@ -186,23 +159,11 @@ fn run(args: &[String]) -> Result {
             )
             .into()),
         },
-        "bench" => bench::run(Mode::parse(command, options)?),
-        "bench-run" => bench::run_round(bench::parse_round(options)?),
-        "bench-ab" => ab::run(options),
-        "bench-dostep" => bench::run_dostep(Mode::parse(command, options)?),
-        "sweep" => sweep::run(options),
-        "sweep-case" => sweep::run_case(options),
-        "fuzz" => fuzz::run(options),
-        "figures" => {
-            no_options(command, options)?;
-            figures::run()
-        }
+        "fuzz" => xtask::fuzz::run(options),
         "study" => study::run(options),
-        "bench-study" => study::bench(Mode::parse(command, options)? == Mode::Quick),
-        "profile" => {
-            no_options(command, options)?;
-            profile::run()
-        }
+        // The benchmarks and experiments live in their own crate (bench/); these run it.
+        "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-study" | "sweep"
+        | "sweep-case" | "figures" | "profile" => bench(command, options),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }
@@ -216,99 +177,9 @@ fn no_options(command: &str, options: &[String]) -> Result {
     }
 }
 
-/// The full run of a long command or its `--quick` subset (`bench`, `sweep`).
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Mode {
-    Full,
-    Quick,
-}
-
-impl Mode {
-    /// No option: full; `--quick`: quick; anything else names `command` in its error.
-    pub fn parse(command: &str, options: &[String]) -> Result<Mode> {
-        match options {
-            [] => Ok(Mode::Full),
-            [option] if option == "--quick" => Ok(Mode::Quick),
-            [option, ..] => {
-                Err(format!("`{command}` has no option `{option}` (only --quick)").into())
-            }
-        }
-    }
-}
-
-/// Writes `text` to `path`, naming the file in the error.
-fn write_text(path: &Path, text: &str) -> Result {
-    std::fs::write(path, text)
-        .map_err(|err| format!("cannot write {}: {err}", relative(path)).into())
-}
-
-/// The workspace root: the parent of this crate's directory.
-fn project_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("xtask lives in a subdirectory of the workspace")
-        .to_path_buf()
-}
-
-/// Cargo's target directory (honours `CARGO_TARGET_DIR`).
-fn target_dir() -> PathBuf {
-    let root = project_root();
-    match env::var_os("CARGO_TARGET_DIR") {
-        Some(dir) => root.join(dir),
-        None => root.join("target"),
-    }
-}
-
-/// A `cargo` command: the cargo that invoked us (`CARGO`), run in the project root.
-fn cargo<I, S>(args: I) -> Command
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    let mut cmd = Command::new(env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
-    cmd.args(args).current_dir(project_root());
-    cmd
-}
-
-/// Builds `target/release/beam-body` and returns its absolute path.
-fn build_release_binary() -> Result<PathBuf> {
-    run_cmd(&mut cargo(["build", "--release", "--bin", "beam-body"]))?;
-    Ok(target_dir().join("release").join("beam-body"))
-}
-
-/// Runs `cmd` with inherited stdio, echoing it first; a non-zero exit is an error.
-fn run_cmd(cmd: &mut Command) -> Result {
-    let status = status_of(cmd)?;
-    if status.success() {
-        Ok(())
-    } else {
-        Err(format!("`{}` failed ({status})", display(cmd)).into())
-    }
-}
-
-/// Runs `cmd` with inherited stdio, echoing it first, and returns how it ended.
-fn status_of(cmd: &mut Command) -> Result<ExitStatus> {
-    eprintln!("$ {}", display(cmd));
-    let status = cmd
-        .status()
-        .map_err(|err| format!("could not run `{}`: {err}", cmd.get_program().to_string_lossy()))?;
-    Ok(status)
-}
-
-/// `program arg1 arg2 ...`, for messages, with the program's path shortened.
-fn display(cmd: &Command) -> String {
-    let program = cmd.get_program();
-    let program = if env::var_os("CARGO").is_some_and(|cargo| cargo == program) {
-        "cargo".to_owned()
-    } else {
-        relative(Path::new(program))
-    };
-    let args = cmd.get_args().map(OsStr::to_string_lossy);
-    std::iter::once(program.into()).chain(args).collect::<Vec<_>>().join(" ")
-}
-
-/// `path` relative to the project root when it is inside it, for messages.
-fn relative(path: &Path) -> String {
-    let root = project_root();
-    path.strip_prefix(&root).unwrap_or(path).display().to_string()
+/// `cargo run --release -p beam-body-bench -- COMMAND OPTIONS`: a benchmark or an experiment.
+fn bench(command: &str, options: &[String]) -> Result {
+    let mut cmd = cargo(["run", "--quiet", "--release", "-p", "beam-body-bench", "--"]);
+    cmd.arg(command).args(options);
+    run_cmd(&mut cmd)
 }

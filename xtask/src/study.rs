@@ -1,11 +1,10 @@
-//! `cargo xtask study ARGS...`: the study tool (python/beam_body_study) from a fresh clone,
-//! and `cargo xtask bench-study`: its throughput on this machine.
+//! `cargo xtask study ARGS...`: the study tool (python/beam_body_study) from a fresh clone.
 
 use std::env;
 use std::ffi::OsString;
 use std::process::Command;
 
-use crate::{build_release_binary, project_root, python, run_cmd, status_of, Result};
+use crate::{build_release_binary, project_root, python, status_of, Result};
 
 /// `python -m beam_body_study ARGS` in target/venv, with the release CLI, in the caller's
 /// directory (so that relative paths are the caller's).
@@ -29,22 +28,8 @@ pub fn run(args: &[String]) -> Result {
     }
 }
 
-/// `cargo xtask bench-study [--quick]`: xtask/python/bench_study.py (the runners side by side).
-pub fn bench(quick: bool) -> Result {
-    let python = python::ensure_venv()?;
-    let binary = build_release_binary()?;
-    let root = project_root();
-    let mut cmd = Command::new(python);
-    cmd.arg(root.join("xtask").join("python").join("bench_study.py"))
-        .args(quick.then_some("--quick"))
-        .env("BEAM_BODY_BIN", binary)
-        .env("PYTHONPATH", python_path())
-        .current_dir(&root);
-    run_cmd(&mut cmd)
-}
-
 /// python/ first, then what PYTHONPATH held.
-fn python_path() -> OsString {
+pub fn python_path() -> OsString {
     let mut paths = vec![project_root().join("python")];
     if let Some(old) = env::var_os("PYTHONPATH") {
         paths.extend(env::split_paths(&old));

@@ -2,24 +2,16 @@
 //! linear solver, on the same compiled right-hand sides as ours (`TwoDofSystem`,
 //! `DaeSystem`).
 //!
-//! CVODE 6.4.1 as Debian ships it (`libsundials-cvode6`), loaded at run time with
-//! libloading. The C declarations are written out here from the SUNDIALS 6.4 documentation:
-//! no headers, no bindgen, no cmake. Debian's `libsundials_cvode.so.6` carries its own copies
-//! of the generic layer (SUNContext), the serial N_Vector, the dense SUNMatrix and the dense
-//! SUNLinearSolver (see `nm -D`), so it is the only library loaded, and every object comes
-//! from it. Its build uses 64-bit indices: `sunindextype` is `int64_t` (SUNDenseMatrix_Rows
-//! returns a 64-bit value, -701 on a bad argument) and `realtype` is `double`.
-//!
-//! Debian's build is not optimised: its code is that of `gcc -O0` (arguments spilled to the
-//! stack, `N_VWrmsNorm_Serial` calling `N_VWSqrSumLocal_Serial` twice through the PLT), and
-//! it runs this benchmark as fast as SUNDIALS 7.1.1 compiled with `-O0` and about 3× slower
-//! than the same source with `-O2`, with identical steps and counters. The environment
-//! variable `BEAM_BODY_CVODE_LIB` names another CVODE shared library to load instead (a path):
-//! SUNDIALS 6 or 7 with double precision and 64-bit indices, holding the serial vector and
-//! the dense matrix and linear solver as Debian's does. The API used is the same in 6 and 7
-//! but for the error handler (`CVodeSetErrHandlerFn` in 6, `SUNContext_PushErrHandler` in 7)
-//! and `SUNContext_Create`'s first argument (`void*` in 6, an `int` `SUNComm` in 7 without
-//! MPI): null either way, in the same register. [`describe`] names the library and version.
+//! CVODE 7.1.1, built from source at -O2 by [`sundials_build`](super::sundials_build) and
+//! named by the environment variable `BEAM_BODY_CVODE_LIB`, loaded at run time with
+//! libloading. The C declarations are written out here from the SUNDIALS documentation: no
+//! headers, no bindgen, no cmake. The library holds the generic layer (SUNContext), the
+//! serial N_Vector, the dense SUNMatrix and the dense SUNLinearSolver, so it is the only one
+//! loaded, and every object comes from it: double precision, 64-bit indices (`sunindextype`
+//! is `int64_t`). The API used is the same in SUNDIALS 6 and 7 but for the error handler
+//! (`CVodeSetErrHandlerFn` in 6, `SUNContext_PushErrHandler` in 7) and `SUNContext_Create`'s
+//! first argument (`void*` in 6, an `int` `SUNComm` in 7 without MPI): null either way, in
+//! the same register. [`describe`] names the library and version.
 //!
 //! As our driver does (`Run::step_to`), a solve stops exactly on the law's breakpoint
 //! t_rot (`CVodeSetStopTime`), switches to the next piece of φ and restarts there
@@ -55,9 +47,7 @@ use nalgebra::SVector;
 
 use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
 
-/// The soname of CVODE 6 (Debian's `libsundials-cvode6`).
-const LIBRARY: &str = "libsundials_cvode.so.6";
-/// Names another CVODE library to load (see the module's documentation).
+/// Names the CVODE library to load (see the module's documentation).
 const LIBRARY_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
 
 // Opaque handles (pointers to structs the library allocates).
@@ -66,7 +56,7 @@ type NVector = *mut GenericNVector;
 type SunMatrix = *mut c_void;
 type SunLinearSolver = *mut c_void;
 type CvodeMem = *mut c_void;
-/// `sunindextype` of Debian's build.
+/// `sunindextype` of the build (64-bit indices).
 type SunIndex = i64;
 
 /// `CVRhsFn`: ydot = f(t, y); 0 on success, > 0 recoverable, < 0 fatal.
@@ -181,17 +171,14 @@ unsafe fn symbol<T: Copy>(
 
 impl Api {
     fn load() -> Result<Api, String> {
-        let custom = std::env::var(LIBRARY_VARIABLE).ok().filter(|p| !p.is_empty());
-        let name = custom.as_deref().unwrap_or(LIBRARY);
+        let path = std::env::var(LIBRARY_VARIABLE).ok().filter(|p| !p.is_empty()).ok_or_else(|| {
+            format!("CVODE not available: {LIBRARY_VARIABLE} is not set (`cargo xtask bench` builds CVODE and sets it)")
+        })?;
+        let name = path.as_str();
         // SAFETY: loading runs the library's initialisers; CVODE's have no side effects
         // beyond its own memory.
-        let lib = unsafe { Library::new(name) }.map_err(|err| match &custom {
-            Some(path) => format!("CVODE not available: {LIBRARY_VARIABLE}={path}: {err}"),
-            None => format!(
-                "CVODE not available: {LIBRARY} not found (apt-get install libsundials-cvode6 \
-                 libsundials-nvecserial6 libsundials-sunlinsol3 libsundials-sunmatrix4): {err}"
-            ),
-        })?;
+        let lib = unsafe { Library::new(name) }
+            .map_err(|err| format!("CVODE not available: {LIBRARY_VARIABLE}={path}: {err}"))?;
         // SAFETY: `SUNDIALSGetVersion(char* version, int len)` (6 and 7) writes a C string of
         // at most `len` bytes.
         let version = unsafe {
@@ -284,8 +271,7 @@ fn api() -> Result<&'static Api, String> {
     API.get_or_init(Api::load).as_ref().map_err(Clone::clone)
 }
 
-/// The CVODE loaded, e.g. `SUNDIALS 6.4.1 (libsundials_cvode.so.6)`, or why none could be.
-#[allow(dead_code)]
+/// The CVODE loaded, e.g. `SUNDIALS 7.1.1 (…/libsundials_cvode_opt.so)`, or why none could be.
 pub fn describe() -> Result<String, String> {
     api().map(|api| api.description.clone())
 }

@@ -6,8 +6,8 @@ use std::process::Command;
 use crate::{project_root, python, run_cmd, Result};
 
 /// `cargo xtask profile`: a release build with symbols and line tables (target/prof),
-/// xtask/python/profile_step.py on each benchmark scene at rtol 1e-6, and
-/// xtask/python/profile_lines.py on the paper's; target/prof/profile.md.
+/// bench/python/profile_step.py on each benchmark scene at rtol 1e-6, and
+/// bench/python/profile_lines.py on the paper's; target/prof/profile.md.
 pub fn run() -> Result {
     crate::system::ensure("cargo xtask profile", &[crate::system::TEST_TOOLS])?;
     let python = python::ensure_venv()?;
@@ -22,7 +22,7 @@ pub fn run() -> Result {
     let mut report = String::from(
         "# Instructions per step\n\n`cargo xtask profile`: callgrind on one run of each scene \
          at rtol 1e-6, outputs only at 0 and t_end; instructions by the source line they \
-         come from (xtask/python/profile_step.py).\n",
+         come from (bench/python/profile_step.py).\n",
     );
     for (label, scene, formulation) in [
         ("paper", "scenes/paper.toml", "reduced"),
@@ -31,7 +31,7 @@ pub fn run() -> Result {
         ("stiff", "scenes/stiff.toml", "reduced"),
     ] {
         let out = Command::new(&python)
-            .arg(root.join("xtask").join("python").join("profile_step.py"))
+            .arg(root.join("bench").join("python").join("profile_step.py"))
             .arg(&binary)
             .arg(root.join(scene))
             .args(["--formulation", formulation, "--label", label])
@@ -49,13 +49,13 @@ pub fn run() -> Result {
         report.push_str(&String::from_utf8_lossy(&out.stdout));
     }
     // The paper's scene line by line: each instruction to the innermost line of ours in its
-    // inline chain (xtask/python/profile_lines.py).
+    // inline chain (bench/python/profile_lines.py).
     let out = Command::new(&python)
-        .arg(root.join("xtask").join("python").join("profile_lines.py"))
+        .arg(root.join("bench").join("python").join("profile_lines.py"))
         .arg(&binary)
         .arg(root.join("scenes").join("paper.toml"))
         .args(["--top", "40"])
-        .current_dir(root.join("xtask").join("python"))
+        .current_dir(root.join("bench").join("python"))
         .output()
         .map_err(|e| format!("cannot run profile_lines.py: {e}"))?;
     if !out.status.success() {

@@ -1,6 +1,6 @@
 """Reference solutions of the work-precision benchmark on the contract's output grid.
 
-    python xtask/python/bench_reference.py [--dir target/bench] [--scenes paper,stiff,...] [--force]
+    python bench/python/bench_reference.py [--dir target/bench] [--scenes paper,stiff,...] [--force]
                                            [--budget-seconds 600] [--jobs N]
 
 For each scene it writes <dir>/ref/<scene>.csv (same format as the sol/ files: t and the states on the

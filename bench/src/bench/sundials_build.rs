@@ -286,7 +286,7 @@ fn fetch(dir: &Path) -> Result<(), String> {
     // `[workspace]`: its own workspace root, not a stray member of the project's workspace
     // (it lies under `target/`, inside the project).
     let manifest = format!(
-        "# Written by `cargo xtask bench` (xtask/src/bench/sundials_build.rs): only fetched,\n\
+        "# Written by `cargo xtask bench` (bench/src/bench/sundials_build.rs): only fetched,\n\
          # never built, for SUNDIALS' C sources vendored in {CRATE}.\n\
          [package]\nname = \"fetch-sundials-sources\"\nversion = \"0.0.0\"\nedition = \"2021\"\n\
          publish = false\n\n[dependencies]\n\
@@ -449,7 +449,7 @@ mod tests {
     /// Fetches, builds and loads the library, then solves the paper scene with it through
     /// `cvode.rs`. Ignored by default (it needs crates.io unless cargo's cache holds the crate,
     /// and a C compiler); run it alone, since `cvode.rs` loads its library once per process:
-    /// `cargo test -p xtask sundials_build -- --ignored`.
+    /// `cargo test -p beam-body-bench sundials_build -- --ignored`.
     #[test]
     #[ignore]
     fn builds_an_optimized_cvode_that_solves_the_paper_scene() {

@@ -703,8 +703,8 @@ pub fn run(options: &[String]) -> Result {
         _ => (Mode::parse("sweep", options)?, None),
     };
     crate::bench::fmu::prepare_at(fmu::extracted_dir())?;
-    run_cmd(&mut cargo(["build", "--release", "-p", "xtask"]))?;
-    let exe = target_dir().join("release").join("xtask");
+    run_cmd(&mut cargo(["build", "--release", "-p", "beam-body-bench"]))?;
+    let exe = target_dir().join("release").join("beam-body-bench");
     let list = cases();
     let selected: Vec<usize> = (0..list.len())
         .filter(|&i| match group {
@@ -834,7 +834,7 @@ fn preamble() -> String {
          and fails unless each of its cases ends as expected.\n\n\
          Each case runs in its own process under a wall-clock limit (600 s), so a hang or a \
          crash would show as a status. The reference is the same formulation integrated by an \
-         explicit Dormand–Prince 5(4) pair at rtol 1e-12 (`xtask/src/sweep/reference.rs`), \
+         explicit Dormand–Prince 5(4) pair at rtol 1e-12 (`bench/src/sweep/reference.rs`), \
          which shares only the right-hand side and the range check with the BDF. The error \
          is the RMS over the output grid and over v1, ϑ1, v̇1, ϑ̇1 of (y − y_ref)/max|y_ref|; \
          the position error takes v1 and ϑ1 only. A case is *ok* if its error is within \

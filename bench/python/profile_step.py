@@ -34,7 +34,7 @@ PARTS = {
     "coefficients": ("solver/coeffs.rs",),
     "LU factorisation and solves": ("solver/lu.rs",),
     "stability guard": ("solver/guard.rs", "solver/eigen.rs"),
-    "integrator (bdf.rs)": ("solver/bdf.rs", "solver/config.rs", "solver/stats.rs",
+    "integrator (bdf/)": ("solver/bdf/", "solver/config.rs", "solver/stats.rs",
                             "solver/system.rs"),
     "driver and output sampling": ("sim.rs", "model/signal.rs", "study/"),
     "sin and cos (libm)": ("sincos.rs", "k_sin.rs", "k_cos.rs", "rem_pio2", "/sin.rs",

@@ -7,14 +7,14 @@
 //!   texts are the cases' names: `raw.csv` and the `sol/` file names repeat them verbatim.
 //! - `raw.csv` (`round,solver,scene,rtol,h,time_s,steps,rejected,rhs_evals,jac_evals,
 //!   lu_factorizations,newton_iters,status`): one row per case and round, appended by
-//!   `bench-run` (the Rust solvers) and `xtask/python/bench_scipy.py` (SciPy).
+//!   `bench-run` (the Rust solvers) and `bench/python/bench_scipy.py` (SciPy).
 //! - `sol/<solver>__<scene>__<rtol>__<h>.csv` (`-` for an empty field): the solution on the
 //!   grid, written in round 0, the warm-up.
 //! - `costs.csv` (`round,scene,rhs_ns,lu_ns,solve_ns,rhs_throughput_ns,solve_throughput_ns`):
 //!   appended by `bench-run` after the cases of every round, so that the prices see the machine
 //!   as the timed solves do (the report takes their medians over the timed rounds).
-//! - `ref/` (the reference solutions, `xtask/python/bench_reference.py`) and the outputs
-//!   `work_precision.{csv,png,md}` (`xtask/python/bench_report.py`).
+//! - `ref/` (the reference solutions, `bench/python/bench_reference.py`) and the outputs
+//!   `work_precision.{csv,png,md}` (`bench/python/bench_report.py`).
 //!
 //! Timing: a warm-up round 0, then R timed rounds (10; 3 with `--quick`). In each round all
 //! Rust cases run in one release process in an order shuffled with seed = round, each timed
@@ -26,7 +26,7 @@
 //! the case list holds only cases that finish in seconds.
 
 mod cvode;
-#[cfg(feature = "bench")]
+#[cfg(feature = "peers")]
 mod diffsol;
 mod dostep;
 pub mod fmu;
@@ -52,7 +52,7 @@ use problem::{state_names, Counters, Outcome, Problem, SCENES};
 
 /// The solvers that `bench-run` runs in-process.
 const RUST_SOLVERS: [&str; 5] = ["bdf", "bdf-fixed", "fmu", "cvode", "diffsol"];
-/// The solvers of `xtask/python/bench_scipy.py`.
+/// The solvers of `bench/python/bench_scipy.py`.
 const SCIPY_SOLVERS: [&str; 3] = ["scipy-bdf", "scipy-radau", "scipy-lsoda"];
 
 const CASES_HEADER: &str = "solver,scene,rtol,h";
@@ -61,21 +61,19 @@ const RAW_HEADER: &str = "round,solver,scene,rtol,h,time_s,steps,rejected,rhs_ev
 const COSTS_HEADER: &str =
     "round,scene,rhs_ns,lu_ns,solve_ns,rhs_throughput_ns,solve_throughput_ns";
 
-impl Mode {
-    /// The time limit of one SciPy solve (`bench_scipy.py --max-seconds`).
-    fn scipy_max_seconds(self) -> u32 {
-        match self {
-            Mode::Full => 60,
-            Mode::Quick => 20,
-        }
+/// The time limit of one SciPy solve (`bench_scipy.py --max-seconds`).
+fn scipy_max_seconds(mode: Mode) -> u32 {
+    match mode {
+        Mode::Full => 60,
+        Mode::Quick => 20,
     }
+}
 
-    /// Timed rounds after the warm-up.
-    fn rounds(self) -> u64 {
-        match self {
-            Mode::Full => 10,
-            Mode::Quick => 3,
-        }
+/// Timed rounds after the warm-up.
+fn rounds(mode: Mode) -> u64 {
+    match mode {
+        Mode::Full => 10,
+        Mode::Quick => 3,
     }
 }
 
@@ -271,7 +269,7 @@ pub fn run(mode: Mode) -> Result {
 
     // Setup: the venv, the FMU, SUNDIALS, the release build. Not part of the timed phases.
     let python = python::ensure_venv()?;
-    let requirements = root.join("xtask").join("python").join("requirements-bench.txt");
+    let requirements = root.join("bench").join("python").join("requirements-bench.txt");
     if requirements.is_file() {
         let mut pip = Command::new(&python);
         pip.args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
@@ -284,13 +282,13 @@ pub fn run(mode: Mode) -> Result {
     let fmu_dir = fmu::prepare()?;
     eprintln!("FMU extracted to {}", relative(&fmu_dir));
     let cvode_lib = optimized_cvode();
-    let cvode = cvode_lib.is_some() || ensure_sundials();
+    let cvode = cvode_lib.is_some();
     // The CLI (the reference script's second method) and the release runner of the rounds:
-    // the binary that `cargo run --release -p xtask --features bench -- bench-run` runs, built
+    // the binary that `cargo run --release -p beam-body-bench --features peers -- bench-run` runs, built
     // once so that cargo's checks stay out of the rounds.
     crate::build_release_binary()?;
-    run_cmd(&mut cargo(["build", "--release", "-p", "xtask", "--features", "bench"]))?;
-    let runner = target_dir().join("release").join("xtask");
+    run_cmd(&mut cargo(["build", "--release", "-p", "beam-body-bench", "--features", "peers"]))?;
+    let runner = target_dir().join("release").join("beam-body-bench");
 
     let cases = cases(mode);
     let cases_csv = dir.join("cases.csv");
@@ -319,7 +317,7 @@ pub fn run(mode: Mode) -> Result {
 
     // The reference solutions (cached by the script).
     let phase = Instant::now();
-    let scripts = root.join("xtask").join("python");
+    let scripts = root.join("bench").join("python");
     let script = |name: &str| -> Option<PathBuf> {
         let path = scripts.join(name);
         if path.is_file() {
@@ -337,8 +335,8 @@ pub fn run(mode: Mode) -> Result {
 
     // Round 0 (warm-up, solutions, costs), then the timed rounds.
     let scipy_script = script("bench_scipy.py");
-    let rounds = mode.rounds();
-    let max_seconds = mode.scipy_max_seconds().to_string();
+    let rounds = rounds(mode);
+    let max_seconds = scipy_max_seconds(mode).to_string();
     let phase = Instant::now();
     for round in 0..=rounds {
         let _tick = crate::progress::ticker(format!("bench: round {round}/{rounds}"), String::new);
@@ -428,12 +426,14 @@ pub fn run(mode: Mode) -> Result {
     Ok(())
 }
 
-/// The variable that names the CVODE library `cvode.rs` loads (Debian's when unset).
+/// The variable that names the CVODE library `cvode.rs` loads.
 const CVODE_LIB_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
 
 /// The CVODE library of the `cvode` cases: the one named by `BEAM_BODY_CVODE_LIB` if set,
-/// else an optimised build from source ([`sundials_build`]); `None` (Debian's library, see
-/// [`ensure_sundials`]) when that build fails.
+/// else an optimised build from source ([`sundials_build`]); `None` when that build fails,
+/// and the cvode cases then fail, each with its reason. (Debian's `libsundials-cvode6` is
+/// compiled at -O0, about 3x slower than the same source at -O2: a flattering peer, so it is
+/// no fallback.)
 fn optimized_cvode() -> Option<PathBuf> {
     if let Some(lib) = std::env::var_os(CVODE_LIB_VARIABLE) {
         eprintln!("cvode: {CVODE_LIB_VARIABLE} = {}", PathBuf::from(&lib).display());
@@ -445,55 +445,10 @@ fn optimized_cvode() -> Option<PathBuf> {
             Some(lib)
         }
         Err(err) => {
-            eprintln!("warning: no optimised CVODE ({err}); the cvode cases use Debian's library");
+            eprintln!("warning: no optimised CVODE ({err}); the cvode cases will fail");
             None
         }
     }
-}
-
-/// Makes sure SUNDIALS' runtime libraries (CVODE, IDA, the serial vector, the dense matrix
-/// and solver) are installed: on Debian as root, `apt-get install` them when
-/// `libsundials_cvode.so.6` is missing. Returns whether CVODE's library is there; a failed
-/// installation is reported and the benchmark goes on (the cvode cases then fail, each with
-/// its reason in raw.csv).
-fn ensure_sundials() -> bool {
-    const LIBRARY: &str = "/usr/lib/x86_64-linux-gnu/libsundials_cvode.so.6";
-    const PACKAGES: [&str; 5] = [
-        "libsundials-cvode6",
-        "libsundials-nvecserial6",
-        "libsundials-sunlinsol3",
-        "libsundials-sunmatrix4",
-        "libsundials-ida6",
-    ];
-    if Path::new(LIBRARY).exists() {
-        return true;
-    }
-    let root = Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.trim_ascii() == b"0");
-    let apt = Command::new("apt-get").arg("--version").output().is_ok_and(|o| o.status.success());
-    if !(root && apt) {
-        eprintln!(
-            "warning: {LIBRARY} is missing and cannot be installed here (needs root and apt-get): \
-             install {} for the cvode cases",
-            PACKAGES.join(" ")
-        );
-        return false;
-    }
-    eprintln!("{LIBRARY} is missing: installing SUNDIALS' runtime libraries with apt-get");
-    let install = || {
-        let mut cmd = Command::new("apt-get");
-        cmd.args(["install", "-y", "--no-install-recommends"])
-            .args(PACKAGES)
-            .env("DEBIAN_FRONTEND", "noninteractive");
-        run_cmd(&mut cmd)
-    };
-    // The package lists of a fresh container are empty: update them once if need be.
-    let installed = install().is_ok()
-        || (run_cmd(Command::new("apt-get").arg("update")).is_ok() && install().is_ok());
-    if !installed || !Path::new(LIBRARY).exists() {
-        eprintln!("warning: could not install SUNDIALS; the cvode cases will fail");
-        return false;
-    }
-    true
 }
 
 // ---------------------------------------------------------------------------------------
@@ -622,13 +577,13 @@ fn timed_solve(
     (time, result)
 }
 
-/// `diffsol` is compiled only with the feature `bench` (its crate is an optional dependency).
-#[cfg(not(feature = "bench"))]
+/// `diffsol` is compiled only with the feature `peers` (its crate is an optional dependency).
+#[cfg(not(feature = "peers"))]
 mod diffsol {
     use super::problem::{Outcome, Problem};
 
     pub fn run(_problem: &Problem, _rtol: f64) -> Result<Outcome, String> {
-        Err("diffsol is built only with --features bench".into())
+        Err("diffsol is built only with --features peers".into())
     }
 }
 

@@ -1,6 +1,6 @@
 """Report of the work-precision benchmark: errors, medians, CSV, figure and markdown summary.
 
-    python xtask/python/bench_report.py [--dir target/bench] [--docs-dir docs | --no-docs]
+    python bench/python/bench_report.py [--dir target/bench] [--docs-dir docs | --no-docs]
                                         [--command "cargo xtask bench"]
 
 Reads <dir>/cases.csv, raw.csv (rounds >= 1 for timing; round 0, the warm-up, only for counters

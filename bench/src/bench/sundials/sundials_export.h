@@ -1,5 +1,5 @@
 /* sundials_export.h for SUNDIALS 7.1.1, written by hand for `cargo xtask bench`
- * (xtask/src/bench/sundials_build.rs) in place of the one CMake's GenerateExportHeader writes
+ * (bench/src/bench/sundials_build.rs) in place of the one CMake's GenerateExportHeader writes
  * for a shared library built with gcc: the API is exported with default visibility. */
 #ifndef SUNDIALS_EXPORT_H
 #define SUNDIALS_EXPORT_H

@@ -1,6 +1,6 @@
 """The README's figures: the paper's Fig. 3 recomputed, and a drawing of the model.
 
-    python xtask/python/figures.py --csv target/figures/figure3.csv [--out-dir docs]
+    python bench/python/figures.py --csv target/figures/figure3.csv [--out-dir docs]
 
 `cargo xtask figures` runs the simulations, measures what the figures show (target/figures/
 figure3.txt) and calls this script, which only draws:
@@ -51,7 +51,7 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
 
 
 def rel_diff(a: np.ndarray, b: np.ndarray) -> float:
-    """max |a - b| / max |a|, as xtask/src/figures.rs measures it."""
+    """max |a - b| / max |a|, as bench/src/figures.rs measures it."""
     return float(np.max(np.abs(a - b)) / np.max(np.abs(a)))
 
 

@@ -21,7 +21,7 @@
 //! restarts it at order 1), so it integrates the DAE unprojected and only the grid values are
 //! projected (`DaeSystem::project`, as our driver's outputs are). Ours also projects after
 //! every step. So diffsol's dae_stabilized is its dae plus projected outputs.
-#![cfg(feature = "bench")]
+#![cfg(feature = "peers")]
 
 use std::cell::{Cell, RefCell};
 

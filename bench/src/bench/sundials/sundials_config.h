@@ -1,5 +1,5 @@
 /* sundials_config.h for SUNDIALS 7.1.1 (vendored in the sundials-sys 0.6.2 crate), written
- * by hand for `cargo xtask bench` (xtask/src/bench/sundials_build.rs) in place of the one
+ * by hand for `cargo xtask bench` (bench/src/bench/sundials_build.rs) in place of the one
  * CMake generates from include/sundials/sundials_config.in. The values are those of CMake's
  * defaults for a Release build of CVODE alone with gcc on Linux x86-64:
  * CMAKE_BUILD_TYPE=Release (so SUNDIALS_ENABLE_ERROR_CHECKS off), double precision, 64-bit

@@ -1,7 +1,7 @@
 //! `cargo xtask bench-ab [REV] [--rounds R] [--sample SCENE FORMULATION RTOL]`: the time per
 //! step of the library of a git revision against the working tree's, both at once.
 //!
-//! The runner (`xtask/ab/runner.rs`) is built twice in `target/ab/`: against REV (default
+//! The runner (`bench/ab/runner.rs`) is built twice in `target/ab/`: against REV (default
 //! HEAD), checked out in the worktree `target/ab/rev`, and against the working tree, both with
 //! the workspace's release profile (fat LTO) plus line tables. Each round runs the two at the
 //! same time, one on each core (`taskset`), swapping the cores every round and which starts
@@ -119,7 +119,7 @@ fn build(dir: &Path, name: &str, library: &Path) -> Result<PathBuf> {
          beam-body = {{ path = \"{}\", default-features = false{features} }}\n\
          libc = \"0.2\"\n\n[profile.release]\nlto = \"fat\"\ncodegen-units = 1\n\
          panic = \"unwind\"\ndebug = \"line-tables-only\"\n\n[workspace]\n",
-        root.join("xtask").join("ab").join("runner.rs").display(),
+        root.join("bench").join("ab").join("runner.rs").display(),
         library.display(),
     );
     write_text(&crate_dir.join("Cargo.toml"), &manifest)?;

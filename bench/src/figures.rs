@@ -10,7 +10,7 @@
 //!
 //! The runs happen here, in-process ([`simulate`]); the numbers the README quotes are measured
 //! here too and written to target/figures/figure3.txt, and the command fails if a claim made
-//! about them (the bounds below) no longer holds. xtask/python/figures.py only draws: it reads
+//! about them (the bounds below) no longer holds. bench/python/figures.py only draws: it reads
 //! target/figures/figure3.csv and writes both PNGs.
 
 use std::f64::consts::PI;
@@ -243,7 +243,7 @@ impl Figure3 {
         Ok(Quantity::ALL.map(|q| max_abs_diff(coarse.get(q), fine.get(q)) / max_abs(coarse.get(q))))
     }
 
-    /// The CSV that xtask/python/figures.py draws.
+    /// The CSV that bench/python/figures.py draws.
     pub fn csv(&self) -> String {
         let mut out = String::from(
             "tau,t,phi,v1_reduced,theta1_reduced,u2_reduced,v1_dae,theta1_dae,u2_dae,drift_dae,\
@@ -435,7 +435,7 @@ pub fn run() -> Result {
     let python = crate::python::ensure_venv()?;
     let root = project_root();
     let mut cmd = Command::new(python);
-    cmd.arg(relative(&root.join("xtask").join("python").join("figures.py")))
+    cmd.arg(relative(&root.join("bench").join("python").join("figures.py")))
         .arg("--csv")
         .arg(relative(&csv))
         .args(["--out-dir", "docs"])

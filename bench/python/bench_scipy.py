@@ -1,7 +1,7 @@
 """SciPy solvers of the work-precision benchmark: `scipy-bdf`, `scipy-radau`, `scipy-lsoda`
 (scipy.integrate.solve_ivp methods 'BDF', 'Radau', 'LSODA') on a NumPy right-hand side.
 
-    python xtask/python/bench_scipy.py --round K [--cases target/bench/cases.csv] [--dir target/bench]
+    python bench/python/bench_scipy.py --round K [--cases target/bench/cases.csv] [--dir target/bench]
                                        [--max-seconds 120]
 
 Runs the cases of cases.csv whose solver is one of the three, in an order shuffled with seed K, and

@@ -1,4 +1,4 @@
-//! The runner of `cargo xtask bench-ab` (xtask/src/ab.rs), built once against the library of a
+//! The runner of `cargo xtask bench-ab` (bench/src/ab.rs), built once against the library of a
 //! git revision and once against the working tree: the same source, so that the two differ only
 //! in the library they link.
 //!
