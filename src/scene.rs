@@ -374,6 +374,20 @@ pub use file::{locate, syntax_error, toml_value};
 mod tests {
     use super::*;
 
+    /// `Scene::set` and `get` take every setting of the table, by key and by the name and
+    /// text a user types, and give back what was set.
+    #[test]
+    fn every_setting_of_the_table_is_set_and_read_back() {
+        for s in crate::settings::SETTINGS.iter() {
+            let mut scene = Scene::default();
+            assert_eq!(scene.get(s.key), s.default, "{}", s.name);
+            scene.set(s.key, s.default).unwrap();
+            assert_eq!(scene.get(s.key), s.default, "{}", s.name);
+            scene.set_text(s.name, &s.show(s.fmu_default())).unwrap();
+            assert_eq!(scene.get(s.key), s.fmu_default(), "{}", s.name);
+        }
+    }
+
     #[test]
     fn defaults_are_the_tables_and_the_models() {
         let s = Scene::default();

@@ -308,3 +308,21 @@ fn the_scene_file_comes_first_and_the_study_overrides_it() {
     assert_eq!((study.base.t_end, study.base.params.m2, study.base.solver.rtol), (4.0, 20.0, 1e-8));
     assert_eq!(study.scene_path(), Some("base.toml"));
 }
+
+/// The study's parameters are the settings table's rows marked `study`: each of them can be
+/// varied, and no other setting can.
+#[test]
+fn the_parameters_a_study_takes_are_the_settings_table_s() {
+    for s in &SETTINGS {
+        let x = match s.default {
+            crate::settings::Value::Real(x) => x,
+            _ => 1.0,
+        };
+        let text = format!("metrics = [\"max_v1\"]\n[parameters.{}]\nvalues = [{x:?}]\n", s.name);
+        let parsed = parse(&text);
+        assert_eq!(parsed.is_ok(), s.appears.study, "{}: {:?}", s.name, parsed.err());
+    }
+    let names: Vec<&str> = variables().map(|s| s.name).collect();
+    let marked: Vec<&str> = SETTINGS.iter().filter(|s| s.appears.study).map(|s| s.name).collect();
+    assert_eq!(names, marked);
+}

@@ -1,5 +1,5 @@
-"""The README's study commands (Design studies) run as written, from the repository root, and give
-the figures the README quotes. The outputs go to a temporary directory instead of target/study/,
+"""The study commands of docs/design-studies.md run as written, from the repository root, and give
+the figures that page quotes. The outputs go to a temporary directory instead of target/study/,
 so that the test does not meet the finished chunks of an earlier run."""
 
 from __future__ import annotations
@@ -25,10 +25,9 @@ def read_bare(path):
 
 
 def readme_study_commands() -> list:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
-    section = text.split("## Design studies", 1)[1]
+    section = (REPO / "docs" / "design-studies.md").read_text(encoding="utf-8")
     match = re.search(r"```sh\n(.*?)```", section, re.S)
-    assert match, "README.md has no ```sh block under '## Design studies'"
+    assert match, "docs/design-studies.md has no ```sh block"
     return [line for line in match.group(1).splitlines() if line.strip()]
 
 
@@ -40,12 +39,12 @@ def test_readme_study_examples(tmp_path):
         proc = subprocess.run(args, cwd=REPO, capture_output=True, text=True, timeout=900)
         assert proc.returncode == 0, f"`{command}` failed:\n{proc.stderr[-4000:]}"
 
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    readme = (REPO / "docs" / "design-studies.md").read_text(encoding="utf-8")
     turn = read_bare(tmp_path / "turn_map.parquet")
     assert len(turn["case"]) == 2812 and set(turn["status"]) == {"ok"}
     t_rot, residual = np.array(turn["t_rot"]), np.array(turn["residual_v1"])
     below = residual < 0.01
-    # The README's figures of the map.
+    # The page's figures of the map.
     assert f"{below.sum()} of the 2,812 cases are below 1 cm" in readme, below.sum()
     assert f"none with a turn shorter than {t_rot[below].min():g} s" in readme
     short = residual[t_rot <= 2.0]
