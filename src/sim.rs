@@ -186,13 +186,27 @@ fn advance_probing<const N: usize, S: OdeSystem<N>>(
     bdf.advance(sys, tout, tstop)
 }
 
-fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
+/// The system of the four-state formulations (reduced, linear) on piece `phi`: the one step
+/// from a formulation to its equations, for the driver and the benchmark's peers.
+pub fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
     TwoDofSystem { model, phi, linear: formulation == Formulation::Linear, range_check: true }
 }
 
-fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
+/// The system of the six-state formulations (dae, dae_stabilized) on piece `phi`.
+pub fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
     let stabilized = formulation == Formulation::DaeStabilized;
     DaeSystem { model, phi, stabilized, range_check: true }
+}
+
+/// The four-state formulations' initial state (v1, ϑ1, v̇1, ϑ̇1).
+pub fn two_dof_start(init: &InitialState) -> SVector<f64, 4> {
+    SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1)
+}
+
+/// The DAE's initial state: u2 and u̇2 made consistent with the constraint of `system`.
+pub fn dae_start(system: &DaeSystem<'_>, init: &InitialState) -> SVector<f64, 6> {
+    let free = SVector::<f64, 6>::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
+    system.consistent(&free)
 }
 
 /// Four states (reduced, linear) or six (dae, dae_stabilized). The variants differ by
@@ -200,7 +214,7 @@ fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Integrator {
-    Two(Bdf<4>),
+    TwoDof(Bdf<4>),
     Dae(Bdf<6>),
 }
 
@@ -260,13 +274,10 @@ impl Run {
         piece: PhiPiece,
     ) -> Result<Self, SolverError> {
         let bdf = if formulation.is_dae() {
-            let free =
-                SVector::<f64, 6>::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
-            let y0 = dae(&model, piece, formulation).consistent(&free);
+            let y0 = dae_start(&dae(&model, piece, formulation), &init);
             Integrator::Dae(Bdf::new(*options, t0, y0)?)
         } else {
-            let y0 = SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            Integrator::Two(Bdf::new(*options, t0, y0)?)
+            Integrator::TwoDof(Bdf::new(*options, t0, two_dof_start(&init))?)
         };
         Ok(Self {
             model,
@@ -297,7 +308,7 @@ impl Run {
     /// The solver's time: that of its last step.
     pub fn t(&self) -> f64 {
         match &self.bdf {
-            Integrator::Two(b) => b.t(),
+            Integrator::TwoDof(b) => b.t(),
             Integrator::Dae(b) => b.t(),
         }
     }
@@ -309,7 +320,7 @@ impl Run {
 
     pub fn stats(&self) -> Stats {
         match &self.bdf {
-            Integrator::Two(b) => *b.stats(),
+            Integrator::TwoDof(b) => *b.stats(),
             Integrator::Dae(b) => *b.stats(),
         }
     }
@@ -398,7 +409,7 @@ impl Run {
     /// Drops the integrator's step history: it goes on at order 1 from its state.
     fn restart(&mut self) -> Result<(), SolverError> {
         match &mut self.bdf {
-            Integrator::Two(b) => b.reinit(b.t(), *b.y()),
+            Integrator::TwoDof(b) => b.reinit(b.t(), *b.y()),
             Integrator::Dae(b) => b.reinit(b.t(), *b.y()),
         }
     }
@@ -456,7 +467,7 @@ impl Run {
             let range_check = self.range != RangeCheck::Off;
             let probe = std::mem::take(&mut self.untested_join);
             let result = match &mut self.bdf {
-                Integrator::Two(b) => {
+                Integrator::TwoDof(b) => {
                     let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
                     advance_probing(b, &sys, tout, tstop, probe)
                 }
@@ -491,7 +502,7 @@ impl Run {
     /// Whether `t` is not behind the integrator's last step ([`Bdf::reaches_back_to`]).
     fn reaches_back_to(&self, t: f64) -> bool {
         match &self.bdf {
-            Integrator::Two(b) => b.reaches_back_to(t),
+            Integrator::TwoDof(b) => b.reaches_back_to(t),
             Integrator::Dae(b) => b.reaches_back_to(t),
         }
     }
@@ -505,7 +516,7 @@ impl Run {
     /// reactions and the energy, which follow from it.
     pub fn kinematics_at(&self, t: f64) -> Result<Kinematics, SolverError> {
         Ok(match &self.bdf {
-            Integrator::Two(b) => self.two_dof().kinematics(t, &b.interpolate(t)?),
+            Integrator::TwoDof(b) => self.two_dof().kinematics(t, &b.interpolate(t)?),
             Integrator::Dae(b) => self.dae().kinematics(t, &b.interpolate(t)?),
         })
     }
@@ -517,7 +528,7 @@ impl Run {
     /// energy; the benchmark records this, as the other solvers record their states.
     pub fn state_at(&self, t: f64, out: &mut [f64; 6]) -> Result<usize, SolverError> {
         match &self.bdf {
-            Integrator::Two(b) => {
+            Integrator::TwoDof(b) => {
                 out[..4].copy_from_slice(b.interpolate(t)?.as_slice());
                 Ok(4)
             }
@@ -574,7 +585,7 @@ impl Run {
             self.range = RangeCheck::Warn;
         }
         match &mut self.bdf {
-            Integrator::Two(b) => b.visit_state(v),
+            Integrator::TwoDof(b) => b.visit_state(v),
             Integrator::Dae(b) => b.visit_state(v),
         }
     }
@@ -600,7 +611,7 @@ impl Run {
             return Err("field `range_warned`: set, but range_check is not warn".into());
         }
         match &self.bdf {
-            Integrator::Two(b) => b.check_state(),
+            Integrator::TwoDof(b) => b.check_state(),
             Integrator::Dae(b) => b.check_state(),
         }
         .map_err(|e| e.to_string())

@@ -47,8 +47,8 @@ pub(super) static FREED: AtomicU64 = AtomicU64::new(0);
 
 thread_local! {
     /// The last instance this thread found live, with the count of frees then. It spares the
-    /// registry's lock on every call after the first (an uncontended lock and a B-tree lookup
-    /// cost about as much as a third of a step at a 0.1 ms communication step). No destructor:
+    /// registry's lock on every call after the first (docs/decisions.md, "No per-call work a
+    /// step does not need"). No destructor:
     /// the library registers none for its threads.
     static LAST_LIVE: Cell<(usize, u64)> = const { Cell::new((0, u64::MAX)) };
 }

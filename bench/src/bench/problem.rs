@@ -4,10 +4,10 @@
 use std::fs;
 use std::path::Path;
 
-use beam_body::model::{BeamBody, DaeSystem, Formulation, PhiPiece, TwoDofSystem};
-use beam_body::sim::Scene;
+use beam_body::model::{BeamBody, Formulation, PhiPiece};
+use beam_body::sim::{self, Scene};
 use beam_body::solver::OdeSystem;
-use nalgebra::{SVector, Vector4, Vector6};
+use nalgebra::SVector;
 
 use crate::{project_root, relative};
 
@@ -39,15 +39,11 @@ pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::O
     let init = scene.initial;
     match scene.formulation {
         Formulation::Reduced | Formulation::Linear => {
-            let linear = scene.formulation == Formulation::Linear;
-            let y0 = Vector4::new(init.v1, init.theta1, init.dv1, init.dtheta1);
-            w.apply(|phi| TwoDofSystem { model, phi, linear, range_check: true }, y0)
+            w.apply(|phi| sim::two_dof(model, phi, scene.formulation), sim::two_dof_start(&init))
         }
         Formulation::Dae | Formulation::DaeStabilized => {
-            let stabilized = scene.formulation == Formulation::DaeStabilized;
-            let system = |phi| DaeSystem { model, phi, stabilized, range_check: true };
-            let free = Vector6::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
-            let y0 = system(scene.law.piece_from(0.0)).consistent(&free);
+            let system = |phi| sim::dae(model, phi, scene.formulation);
+            let y0 = sim::dae_start(&system(scene.law.piece_from(0.0)), &init);
             w.apply(system, y0)
         }
     }

@@ -7,8 +7,8 @@ use super::*;
 /// inverse (cvRestore), for order q. This runs at every step attempt. The additions are
 /// written out for each order, on a local copy of the columns, so that the columns stay in
 /// registers: a load and a store per element instead of two loads and a store per addition
-/// (loops over j kept them in memory: 15 % of the run's instructions on the paper's scene
-/// before, issue 16). They are those of the triangle, in its order.
+/// (loops over j kept them in memory; docs/decisions.md, "The prediction written out").
+/// They are those of the triangle, in its order.
 pub(super) fn pascal<const N: usize, const UNDO: bool>(zn: &mut [SVector<f64, N>; NCOL], q: usize) {
     /// z_{j−1} ± z_j for each j listed, in the order listed, on a local copy of the columns.
     macro_rules! triangle {
