@@ -26,7 +26,7 @@ static REGISTRY: Mutex<Option<Registry>> = Mutex::new(None);
 
 /// Runs `f` on the registry under its lock. The tables are dropped whenever nothing is
 /// registered: a host that unloads the library (`dlclose`) cannot free what a static still
-/// owns, and valgrind counts it as lost once per load (tests/python/test_c_host.py). Empty
+/// owns, and valgrind counts it as lost once per load (tests/python/hosts/test_c_host.py). Empty
 /// tables do not allocate, so re-creating them costs nothing.
 pub(super) fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
     // No code panics while holding the lock, so poisoning can only come from outside; the

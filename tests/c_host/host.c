@@ -1,7 +1,7 @@
 /*
  * A minimal FMI 2.0 co-simulation host for the BeamBody FMU, used as a test fixture by
- * tests/python/test_c_host.py (which compiles it with the system's cc and runs it natively and
- * under valgrind) and tests/python/test_c_host_platforms.py (which cross-compiles it for Windows
+ * tests/python/hosts/test_c_host.py (which compiles it with the system's cc and runs it natively and
+ * under valgrind) and tests/python/hosts/test_c_host_platforms.py (which cross-compiles it for Windows
  * with mingw-w64 and for Linux aarch64, and runs it under wine and qemu-aarch64). It loads the
  * unzipped FMU's library for the platform it was compiled for (binaries/win64/BeamBody.dll,
  * binaries/aarch64-linux/BeamBody.so, binaries/darwin64/BeamBody.dylib, else

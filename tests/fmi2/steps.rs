@@ -117,7 +117,7 @@ fn input_derivatives_are_checked_and_used_for_one_step() {
     let _g = shared();
     let h = Host::new("derivatives");
     // FMI's literal polynomial over each step (phi_interpolation = taylor); the default,
-    // smooth, is tested in tests/python/test_fmu_input.py.
+    // smooth, is tested in tests/python/fmu/test_fmu_input.py.
     h.expect_ok(h.set_integer(Var::PhiInterpolation, 2));
     // Allowed before initialization too.
     h.expect_ok(h.set_derivative(Var::Phi, 1, 0.0));

@@ -1,6 +1,6 @@
 """A small reader of the three shared-library formats the FMU ships: ELF, PE32+ and Mach-O.
 
-Standard library only (struct, hashlib), so that the checks of tests/python/test_fmu_binaries.py
+Standard library only (struct, hashlib), so that the checks of tests/python/binaries/test_fmu_binaries.py
 depend on no binutils, LLVM tool or third-party parser: every figure they assert comes from the
 bytes, decoded here from the formats' specifications (each structure cites its source).
 

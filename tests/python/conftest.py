@@ -122,7 +122,7 @@ def write_report(key: str, line: str):
 
 
 # --------------------------------------------------------------------------------------------------
-# FMU fixtures (tests/python/test_fmu_*.py; helpers in fmu_util.py)
+# FMU fixtures (tests/python/fmu/test_fmu_*.py; helpers in fmu_util.py)
 # --------------------------------------------------------------------------------------------------
 
 
@@ -165,7 +165,7 @@ def fmu_report():
 
 
 # --------------------------------------------------------------------------------------------------
-# the C host (tests/python/test_c_host*.py; helpers in c_host_util.py)
+# the C host (tests/python/hosts/test_c_host*.py; helpers in c_host_util.py)
 # --------------------------------------------------------------------------------------------------
 
 

@@ -1,4 +1,4 @@
-"""Helpers for the FMU tests (tests/python/test_fmu_*.py).
+"""Helpers for the FMU tests (tests/python/fmu/test_fmu_*.py).
 
 - the FMU's path ($BEAM_BODY_FMU, else target/fmu/BeamBody.fmu);
 - the paper's law phi(t), evaluated with the same formula and operation order as the Rust model

@@ -1,6 +1,6 @@
 /*
  * A call-tracing stand-in for binaries/linux64/BeamBody.so, used by the tests of third-party hosts
- * (tests/python/test_fmu_libcosim.py, test_fmu_ecos.py; built and packaged by
+ * (tests/python/hosts/test_fmu_libcosim.py, test_fmu_ecos.py; built and packaged by
  * fmu_util.traced_fmu). It lets a test see every FMI call a host makes, with its arguments, when
  * the host offers no way to switch the FMU's logging on.
  *
