@@ -116,9 +116,9 @@ fn instantiate(name: &CStr, functions: &fmi2CallbackFunctions) -> fmi2Component 
     c
 }
 
-const OK: fmi2Status = Status::Ok as fmi2Status;
-const ERROR: fmi2Status = Status::Error as fmi2Status;
-const FATAL: fmi2Status = Status::Fatal as fmi2Status;
+const OK: fmi2Status = fmi2OK;
+const ERROR: fmi2Status = fmi2Error;
+const FATAL: fmi2Status = fmi2Fatal;
 
 /// An instance in stepComplete at t = 0.01, with the built-in law.
 ///

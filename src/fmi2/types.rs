@@ -44,5 +44,20 @@ pub struct fmi2CallbackFunctions {
     pub componentEnvironment: fmi2ComponentEnvironment,
 }
 
+/// fmi2Status, the core's [`Status`](crate::fmi::Status) as C has it.
+pub const fmi2OK: fmi2Status = crate::fmi::Status::Ok as fmi2Status;
+pub const fmi2Warning: fmi2Status = crate::fmi::Status::Warning as fmi2Status;
+pub const fmi2Discard: fmi2Status = crate::fmi::Status::Discard as fmi2Status;
+pub const fmi2Error: fmi2Status = crate::fmi::Status::Error as fmi2Status;
+pub const fmi2Fatal: fmi2Status = crate::fmi::Status::Fatal as fmi2Status;
+
 /// fmi2Type: only co-simulation is provided.
-pub const FMI2_COSIMULATION: fmi2Type = 1;
+pub const fmi2ModelExchange: fmi2Type = 0;
+pub const fmi2CoSimulation: fmi2Type = 1;
+pub const FMI2_COSIMULATION: fmi2Type = fmi2CoSimulation;
+
+/// fmi2StatusKind.
+pub const fmi2DoStepStatus: fmi2StatusKind = crate::fmi::STATUS_DO_STEP;
+pub const fmi2PendingStatus: fmi2StatusKind = crate::fmi::STATUS_PENDING;
+pub const fmi2LastSuccessfulTime: fmi2StatusKind = crate::fmi::STATUS_LAST_SUCCESSFUL_TIME;
+pub const fmi2Terminated: fmi2StatusKind = crate::fmi::STATUS_TERMINATED;

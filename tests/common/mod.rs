@@ -10,19 +10,13 @@ use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::ptr::{null, null_mut};
 use std::sync::{Mutex, RwLock, RwLockReadGuard, RwLockWriteGuard};
 
-pub const OK: fmi2Status = 0;
-pub const WARNING: fmi2Status = 1;
-pub const DISCARD: fmi2Status = 2;
-pub const ERROR: fmi2Status = 3;
-pub const FATAL: fmi2Status = 4;
-
-pub const MODEL_EXCHANGE: fmi2Type = 0;
-pub const CO_SIMULATION: fmi2Type = 1;
-
-pub const DO_STEP_STATUS: fmi2StatusKind = 0;
-pub const PENDING_STATUS: fmi2StatusKind = 1;
-pub const LAST_SUCCESSFUL_TIME: fmi2StatusKind = 2;
-pub const TERMINATED: fmi2StatusKind = 3;
+// The C constants under short names (the library's, src/fmi2/types.rs).
+pub use beam_body::fmi2::types::{
+    fmi2CoSimulation as CO_SIMULATION, fmi2Discard as DISCARD, fmi2DoStepStatus as DO_STEP_STATUS,
+    fmi2Error as ERROR, fmi2Fatal as FATAL, fmi2LastSuccessfulTime as LAST_SUCCESSFUL_TIME,
+    fmi2ModelExchange as MODEL_EXCHANGE, fmi2OK as OK, fmi2PendingStatus as PENDING_STATUS,
+    fmi2Terminated as TERMINATED, fmi2Warning as WARNING,
+};
 
 /// The value reference of `var`.
 pub fn vr(var: Var) -> fmi2ValueReference {

@@ -5,16 +5,15 @@
 //! returned fmi2Status and, for errors, that a message naming the problem was logged with
 //! the host's componentEnvironment, the instance's name, a declared category and "%s".
 
+mod arguments;
 #[path = "../common/mod.rs"]
 mod common;
-mod lifecycle;
-mod sequences;
-mod arguments;
-mod steps;
 mod fmu_state;
-mod logging;
 mod instances;
-
+mod lifecycle;
+mod logging;
+mod sequences;
+mod steps;
 
 use beam_body::fmi::{reseal, reseal_checksum, HEADER};
 use beam_body::fmi2::exports::*;
@@ -91,18 +90,17 @@ pub(crate) fn fail_a_step(h: &Host) {
     assert_eq!(r.message.matches("integration failed").count(), 1, "said once: {r:?}");
 }
 
-
-#[allow(unused_imports)]
-use lifecycle::*;
-#[allow(unused_imports)]
-use sequences::*;
 #[allow(unused_imports)]
 use arguments::*;
 #[allow(unused_imports)]
-use steps::*;
-#[allow(unused_imports)]
 use fmu_state::*;
+#[allow(unused_imports)]
+use instances::*;
+#[allow(unused_imports)]
+use lifecycle::*;
 #[allow(unused_imports)]
 use logging::*;
 #[allow(unused_imports)]
-use instances::*;
+use sequences::*;
+#[allow(unused_imports)]
+use steps::*;

@@ -15,7 +15,8 @@ pub(crate) enum St {
 }
 pub(crate) use St::*;
 
-pub(crate) const ALL_STATES: [St; 6] = [Instantiated, Init, StepComplete, StepFailed, Terminated, Error];
+pub(crate) const ALL_STATES: [St; 6] =
+    [Instantiated, Init, StepComplete, StepFailed, Terminated, Error];
 
 impl St {
     /// The name the FMU uses in its messages.
