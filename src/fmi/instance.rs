@@ -147,13 +147,23 @@ impl<M: Model> Instance<M> {
         }
     }
 
-    /// Logs each note as a warning from `func`; the status: Warning if there was one.
+    /// Logs each note as a warning from `func`; the status: Warning if there was one. No
+    /// note, the common case on every call, costs a test.
+    #[inline]
     pub(crate) fn notes(&mut self, func: Func, notes: Notes) -> Status {
-        let status = if notes.is_empty() { Status::Ok } else { Status::Warning };
+        if notes.is_empty() {
+            return Status::Ok;
+        }
+        self.log_notes(func, notes)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn log_notes(&mut self, func: Func, notes: Notes) -> Status {
         for note in notes {
             self.log(Status::Warning, &format!("{func}: {note}"));
         }
-        status
+        Status::Warning
     }
 
     /// The one place where a result becomes an FMI status: a failure is logged with its
@@ -438,7 +448,8 @@ impl<M: Model> Instance<M> {
     }
 
     /// Sets all values or none: each is checked first, against its variable's causality,
-    /// the current state and its range; then all are set.
+    /// the current state and its range; then all are set. One value, what a host sends for
+    /// its inputs at every communication point, goes the short way with the same checks.
     pub fn set<T: Copy + fmt::Debug>(
         &mut self,
         name: &'static str,
@@ -448,46 +459,92 @@ impl<M: Model> Instance<M> {
         convert: impl Fn(T) -> Value,
     ) -> Status {
         let f = self.func(name);
-        let r = (|| {
-            self.allowed(f, mask::SET)?;
-            if vrs.len() != values.len() {
-                return Err(FmiError::error(format!(
-                    "{f}: {} value references but {} values",
-                    vrs.len(),
-                    values.len()
-                )));
-            }
-            let state = self.core.state;
-            for (vr, value) in vrs.iter().zip(values) {
-                let info = Self::lookup(f, *vr, base)?;
-                let refusal = match info.causality {
-                    Causality::Output => Some("it is an output".to_string()),
-                    Causality::Parameter if state == State::StepComplete => Some(format!(
-                        "it is a fixed parameter, settable only before \
-                         {} (state is `{}`)",
-                        self.func("ExitInitializationMode"),
-                        state.name()
-                    )),
-                    _ => None,
-                };
-                if let Some(why) = refusal {
-                    return Err(FmiError::error(format!("{f}: cannot set `{}`: {why}", info.name)));
-                }
-                // All or none: with several values, each is checked before any is set.
-                if vrs.len() > 1 {
-                    let checked = self.core.model.check(*vr, convert(*value));
-                    checked.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
-                }
-            }
-            let mut notes = Notes::new();
-            for (vr, value) in vrs.iter().zip(values) {
-                let set = self.core.model.set(*vr, convert(*value), state, &mut notes);
-                set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
-            }
-            trace!(self, "{f}: {}", listing::<M, T>(vrs, values));
-            Ok(self.notes(f, notes))
-        })();
+        let r = match (vrs, values) {
+            ([vr], [value]) => self.set_one(f, base, *vr, *value, convert),
+            _ => self.set_all(f, base, vrs, values, convert),
+        };
         self.status(r)
+    }
+
+    /// [`set`](Self::set) of one value.
+    #[inline]
+    fn set_one<T: Copy + fmt::Debug>(
+        &mut self,
+        f: Func,
+        base: BaseType,
+        vr: u32,
+        value: T,
+        convert: impl Fn(T) -> Value,
+    ) -> FmiResult {
+        self.allowed(f, mask::SET)?;
+        let state = self.core.state;
+        let info = Self::lookup(f, vr, base)?;
+        if matches!(
+            (info.causality, state),
+            (Causality::Output, _) | (Causality::Parameter, State::StepComplete)
+        ) {
+            return Err(self.refusal(f, info, state));
+        }
+        let mut notes = Notes::new();
+        let set = self.core.model.set(vr, convert(value), state, &mut notes);
+        set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+        trace!(self, "{f}: {}", listing::<M, T>(&[vr], &[value]));
+        Ok(self.notes(f, notes))
+    }
+
+    /// [`set`](Self::set) of several values, all or none.
+    fn set_all<T: Copy + fmt::Debug>(
+        &mut self,
+        f: Func,
+        base: BaseType,
+        vrs: &[u32],
+        values: &[T],
+        convert: impl Fn(T) -> Value,
+    ) -> FmiResult {
+        self.allowed(f, mask::SET)?;
+        if vrs.len() != values.len() {
+            return Err(FmiError::error(format!(
+                "{f}: {} value references but {} values",
+                vrs.len(),
+                values.len()
+            )));
+        }
+        let state = self.core.state;
+        for (vr, value) in vrs.iter().zip(values) {
+            let info = Self::lookup(f, *vr, base)?;
+            if matches!(
+                (info.causality, state),
+                (Causality::Output, _) | (Causality::Parameter, State::StepComplete)
+            ) {
+                return Err(self.refusal(f, info, state));
+            }
+            // All or none: each value is checked before any is set.
+            let checked = self.core.model.check(*vr, convert(*value));
+            checked.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+        }
+        let mut notes = Notes::new();
+        for (vr, value) in vrs.iter().zip(values) {
+            let set = self.core.model.set(*vr, convert(*value), state, &mut notes);
+            set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+        }
+        trace!(self, "{f}: {}", listing::<M, T>(vrs, values));
+        Ok(self.notes(f, notes))
+    }
+
+    /// Why `info` cannot be set in `state`: an output, or a fixed parameter after
+    /// initialization.
+    #[cold]
+    #[inline(never)]
+    fn refusal(&self, f: Func, info: &VarInfo, state: State) -> FmiError {
+        let why = match info.causality {
+            Causality::Output => "it is an output".to_string(),
+            _ => format!(
+                "it is a fixed parameter, settable only before {} (state is `{}`)",
+                self.func("ExitInitializationMode"),
+                state.name()
+            ),
+        };
+        FmiError::error(format!("{f}: cannot set `{}`: {why}", info.name))
     }
 
     /// GetReal.
