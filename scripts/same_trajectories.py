@@ -52,24 +52,22 @@ def compare_fmus(old: str, new: str) -> int:
     return 0
 
 
+#: (scene file, extra arguments) of the `simulate` runs.
 SCENES = [
-    [],
-    ["--stiff"],
-    ["--formulation", "dae"],
-    ["--formulation", "dae_stabilized"],
-    ["--formulation", "linear"],
-    ["--set", "phi_end=6.283185307179586", "--set", "M2=24"],
-    ["--set", "EI=1e7", "--set", "t_end=2"],
-    ["--fixed-step", "1e-3", "--fixed-order", "3", "--set", "t_end=3"],
-    ["--rtol", "1e-9", "--set", "t_end=3"],
+    ("paper.toml", []),
+    ("stiff.toml", []),
+    ("paper.toml", ["--formulation", "dae"]),
+    ("paper.toml", ["--formulation", "dae_stabilized"]),
+    ("paper.toml", ["--formulation", "linear"]),
+    ("paper.toml", ["--set", "phi_end=6.283185307179586", "--set", "M2=24"]),
+    ("paper.toml", ["--set", "EI=1e7", "--set", "t_end=2"]),
+    ("paper.toml", ["--fixed-step", "1e-3", "--fixed-order", "3", "--set", "t_end=3"]),
+    ("paper.toml", ["--rtol", "1e-9", "--set", "t_end=3"]),
 ]
 
 
 def compare_clis(old: str, new: str) -> int:
-    runs = []
-    for extra in SCENES:
-        scene = "stiff.toml" if extra == ["--stiff"] else "paper.toml"
-        runs.append(["simulate", str(REPO / "scenes" / scene), *(e for e in extra if e != "--stiff")])
+    runs = [["simulate", str(REPO / "scenes" / scene), *extra] for scene, extra in SCENES]
     for study in sorted((REPO / "examples").glob("*.toml")):
         runs.append(["study", str(study), "--cases", "0..200", "--quiet"])
     for args in runs:

@@ -6,7 +6,7 @@ use super::description::{BaseType, Causality};
 use super::instance::{trace, Instance};
 use super::machine::{mask, FmiError, FmiResult, State, Status};
 use super::model::{CoSimulation, Notes};
-use super::snapshot::same_time;
+use crate::math::same_time;
 
 /// fmi2StatusKind.
 pub const STATUS_DO_STEP: i32 = 0;

@@ -479,12 +479,7 @@ impl<M: Model> Instance<M> {
         self.allowed(f, mask::SET)?;
         let state = self.core.state;
         let info = Self::lookup(f, vr, base)?;
-        if matches!(
-            (info.causality, state),
-            (Causality::Output, _) | (Causality::Parameter, State::StepComplete)
-        ) {
-            return Err(self.refusal(f, info, state));
-        }
+        self.settable(f, info, state)?;
         let mut notes = Notes::new();
         let set = self.core.model.set(vr, convert(value), state, &mut notes);
         set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
@@ -512,12 +507,7 @@ impl<M: Model> Instance<M> {
         let state = self.core.state;
         for (vr, value) in vrs.iter().zip(values) {
             let info = Self::lookup(f, *vr, base)?;
-            if matches!(
-                (info.causality, state),
-                (Causality::Output, _) | (Causality::Parameter, State::StepComplete)
-            ) {
-                return Err(self.refusal(f, info, state));
-            }
+            self.settable(f, info, state)?;
             // All or none: each value is checked before any is set.
             let checked = self.core.model.check(*vr, convert(*value));
             checked.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
@@ -531,8 +521,19 @@ impl<M: Model> Instance<M> {
         Ok(self.notes(f, notes))
     }
 
-    /// Why `info` cannot be set in `state`: an output, or a fixed parameter after
-    /// initialization.
+    /// Whether `info` may be set in `state`: not an output, and a fixed parameter only
+    /// before initialization ends.
+    #[inline]
+    fn settable(&self, f: Func, info: &VarInfo, state: State) -> FmiResult<()> {
+        match (info.causality, state) {
+            (Causality::Output, _) | (Causality::Parameter, State::StepComplete) => {
+                Err(self.refusal(f, info, state))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Why `info` cannot be set in `state` (see [`settable`](Self::settable)).
     #[cold]
     #[inline(never)]
     fn refusal(&self, f: Func, info: &VarInfo, state: State) -> FmiError {

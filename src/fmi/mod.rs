@@ -27,6 +27,6 @@ pub use instance::{Func, Instance, Logger};
 pub use machine::{FmiError, FmiResult, State, Status};
 pub use model::{CoSimulation, Model, Notes, Restore, Setup, StepFailure, Value};
 pub use snapshot::{
-    deserialize, field_offsets, reseal, reseal_checksum, same_time, serialize, version,
-    visit_optional, Snapshot, CORE_VERSION, HEADER,
+    deserialize, field_offsets, reseal, reseal_checksum, serialize, version, visit_optional,
+    Snapshot, CORE_VERSION, HEADER,
 };

@@ -20,6 +20,7 @@
 use super::machine::State;
 use super::model::{Model, Restore, Setup};
 use crate::hash::fnv1a_64;
+use crate::math::same_time;
 use crate::visit::StateVisitor;
 
 /// Everything an FMU state holds: the whole instance except its name and logger.
@@ -46,15 +47,6 @@ impl<M: Model> Snapshot<M> {
             model: M::new(),
         }
     }
-
-    pub fn state(&self) -> State {
-        self.state
-    }
-
-    /// The model's part.
-    pub fn model(&self) -> &M {
-        &self.model
-    }
 }
 
 const MAGIC: &[u8; 8] = b"FMUSTATE";
@@ -68,8 +60,6 @@ pub const HEADER: usize = 8 + 4 + GUID_LEN + 8;
 pub fn version<M: Model>() -> u32 {
     CORE_VERSION * 1000 + M::STATE_VERSION
 }
-
-pub use crate::math::same_time;
 
 /// Serializes a snapshot.
 pub fn serialize<M: Model>(snapshot: &Snapshot<M>) -> Vec<u8> {
@@ -156,6 +146,12 @@ pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
 /// Visits the core's fields, then the model's.
 fn visit<M: Model>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(), String> {
     visit_core(s, v)?;
+    // The experiment's tolerance, by the rule of SetupExperiment.
+    if let Some(tol) = s.setup.tolerance {
+        M::check_tolerance(tol).map_err(|allowed| {
+            format!("field `tolerance` = {tol:?} is out of range: must be {allowed}")
+        })?;
+    }
     let at = Restore { setup: s.setup, state: s.state, time: s.time };
     s.model.visit_state(v, &at)
 }
@@ -198,7 +194,7 @@ fn visit_core<M>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(), S
     check_times(s)
 }
 
-/// The core's checks of the times, once read (the tolerance is the model's to check).
+/// The core's checks of the times, once read.
 fn check_times<M>(s: &Snapshot<M>) -> Result<(), String> {
     let setup = &s.setup;
     if !setup.start_time.is_finite() {

@@ -82,6 +82,14 @@ where
     cmd
 }
 
+/// `cargo run --release -p beam-body-bench -- COMMAND OPTIONS`: a benchmark or an experiment,
+/// which live in their own crate (bench/).
+pub fn bench(command: &str, options: &[String]) -> Result {
+    let mut cmd = cargo(["run", "--quiet", "--release", "-p", "beam-body-bench", "--"]);
+    cmd.arg(command).args(options);
+    run_cmd(&mut cmd)
+}
+
 /// Builds `target/release/beam-body` and returns its absolute path.
 pub fn build_release_binary() -> Result<PathBuf> {
     run_cmd(&mut cargo(["build", "--release", "--bin", "beam-body"]))?;

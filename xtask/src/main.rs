@@ -8,7 +8,7 @@
 
 use std::env;
 use std::process::ExitCode;
-use xtask::{cargo, fmu, model_description, run_cmd, study, test, Result};
+use xtask::{fmu, model_description, study, test, Result};
 
 const HELP: &str = "\
 Usage: cargo xtask <command> [options]
@@ -163,7 +163,7 @@ fn run(args: &[String]) -> Result {
         "study" => study::run(options),
         // The benchmarks and experiments live in their own crate (bench/); these run it.
         "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-study" | "sweep"
-        | "sweep-case" | "figures" | "profile" => bench(command, options),
+        | "sweep-case" | "figures" | "profile" => xtask::bench(command, options),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }
@@ -175,11 +175,4 @@ fn no_options(command: &str, options: &[String]) -> Result {
             Err(format!("`{command}` takes no option `{option}`; run `cargo xtask help`").into())
         }
     }
-}
-
-/// `cargo run --release -p beam-body-bench -- COMMAND OPTIONS`: a benchmark or an experiment.
-fn bench(command: &str, options: &[String]) -> Result {
-    let mut cmd = cargo(["run", "--quiet", "--release", "-p", "beam-body-bench", "--"]);
-    cmd.arg(command).args(options);
-    run_cmd(&mut cmd)
 }

@@ -45,11 +45,7 @@ pub fn run(scope: Scope) -> Result {
         report.step("rust tests (aarch64, qemu)", crate::platforms::test_linux_aarch64);
         // The sweep's representative subset: every row must end as expected (ok within its
         // error bound, or stopped with the expected message).
-        report.step("sweep --quick", || {
-            // The sweep is in the experiments' crate (bench/).
-            let mut cmd = cargo(["run", "--quiet", "--release", "-p", "beam-body-bench", "--"]);
-            run_cmd(cmd.args(["sweep", "--quick"]))
-        });
+        report.step("sweep --quick", || crate::bench("sweep", &["--quick".to_string()]));
         // Each fuzz target for a few seconds, replaying fuzz/regressions/ first.
         report.step("fuzz smoke", crate::fuzz::smoke);
     }
