@@ -4,12 +4,16 @@ use beam_body::math::{cos, exp, log2, powi, sin};
 use beam_body::solver::problems::SlowAndFast;
 use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem};
 use beam_body::visit::StateVisitor;
-use nalgebra::{Matrix2, SMatrix, Vector1, Vector2, Vector3};
+use nalgebra::allocator::Allocator;
+use nalgebra::{
+    DVector, DefaultAllocator, Dim, Dyn, Matrix2, SMatrix, SVector, Vector1, Vector2, Vector3, U1,
+    U2, U3, U4,
+};
 
 /// Prothero–Robinson: y' = λ(y − sin t) + cos t, exact solution y = sin t.
 struct ProtheroRobinson(f64);
 
-impl OdeSystem<1> for ProtheroRobinson {
+impl OdeSystem<U1> for ProtheroRobinson {
     fn rhs(&self, t: f64, y: &Vector1<f64>) -> Vector1<f64> {
         Vector1::new(self.0 * (y[0] - sin(t)) + cos(t))
     }
@@ -77,7 +81,7 @@ impl StiffLinear {
     }
 }
 
-impl OdeSystem<2> for StiffLinear {
+impl OdeSystem<U2> for StiffLinear {
     fn rhs(&self, _t: f64, y: &Vector2<f64>) -> Vector2<f64> {
         Self::matrix() * y
     }
@@ -115,13 +119,13 @@ fn stiff_linear_system() {
 struct Robertson;
 
 /// A solver for [`Robertson`] from y = (1, 0, 0), with the usual per-state atol.
-fn robertson_solver(cfg: &BdfConfig) -> Bdf<3> {
+fn robertson_solver(cfg: &BdfConfig) -> Bdf<U3> {
     let mut s = Bdf::new(*cfg, 0.0, Vector3::new(1.0, 0.0, 0.0)).unwrap();
     s.set_atol(Vector3::new(1e-8, 1e-14, 1e-6)).unwrap();
     s
 }
 
-impl OdeSystem<3> for Robertson {
+impl OdeSystem<U3> for Robertson {
     fn rhs(&self, _t: f64, y: &Vector3<f64>) -> Vector3<f64> {
         let a = -0.04 * y[0] + 1e4 * y[1] * y[2];
         let c = 3e7 * y[1] * y[1];
@@ -283,14 +287,17 @@ impl StateVisitor for ByteReader<'_> {
     }
 }
 
-fn to_bytes<const N: usize>(s: &Bdf<N>) -> Vec<u8> {
+fn to_bytes<D: Dim>(s: &Bdf<D>) -> Vec<u8>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     let mut w = ByteWriter(Vec::new());
     s.clone().visit_state(&mut w);
     w.0
 }
 
 /// Reads a state from bytes into a fresh solver with configuration `cfg`.
-fn from_bytes(cfg: &BdfConfig, bytes: &[u8]) -> Result<Bdf<3>, String> {
+fn from_bytes(cfg: &BdfConfig, bytes: &[u8]) -> Result<Bdf<U3>, String> {
     let mut s = robertson_solver(cfg);
     let mut r = ByteReader { bytes, error: None };
     s.visit_state(&mut r);
@@ -350,4 +357,64 @@ fn damaged_state_bytes_never_panic() {
         }
     }
     eprintln!("{accepted} of {} damaged states passed the check", 2 * bytes.len());
+}
+
+/// A fixed-dimension system seen with a run-time dimension: the same equations in a
+/// `DVector`.
+struct AsDyn<S>(S);
+
+impl<S: OdeSystem<U4>> OdeSystem<Dyn> for AsDyn<S> {
+    fn rhs(&self, t: f64, y: &DVector<f64>) -> DVector<f64> {
+        let f = self.0.rhs(t, &SVector::<f64, 4>::from_column_slice(y.as_slice()));
+        DVector::from_column_slice(f.as_slice())
+    }
+}
+
+/// Forward differences only, so that both dimensions take the same Jacobian.
+struct NoJacobian(SlowAndFast);
+
+impl OdeSystem<U4> for NoJacobian {
+    fn rhs(&self, t: f64, y: &SVector<f64, 4>) -> SVector<f64, 4> {
+        self.0.rhs(t, y)
+    }
+}
+
+/// The solver in a run-time dimension computes what it computes in the fixed one, bit for
+/// bit: the steps, the orders the stability guard allows (ω = 30, in BDF3–5's band at rtol
+/// 1e-5), the finite-difference Jacobian and its LU, the dense output; and its state, written
+/// and read back into a fresh solver, continues alike.
+#[test]
+fn a_run_time_dimension_gives_the_fixed_dimension_s_results_bit_for_bit() {
+    let sys = NoJacobian(SlowAndFast { fast: 30.0, slow_oscillates: false });
+    let cfg = BdfConfig::new(1e-5);
+    let y0 = sys.0.initial();
+    let mut fixed = Bdf::new(cfg, 0.0, y0).unwrap();
+    let mut dynamic = Bdf::new(cfg, 0.0, DVector::from_column_slice(y0.as_slice())).unwrap();
+    let dyn_sys = AsDyn(sys);
+    for k in 1..=40 {
+        let t = 5.0 * k as f64;
+        fixed.advance(&dyn_sys.0, t, f64::INFINITY).unwrap();
+        dynamic.advance(&dyn_sys, t, f64::INFINITY).unwrap();
+        assert_eq!(fixed.y().as_slice(), dynamic.y().as_slice(), "t = {t}");
+        let (a, b) = (fixed.interpolate(t).unwrap(), dynamic.interpolate(t).unwrap());
+        assert_eq!(a.as_slice(), b.as_slice());
+        assert_eq!(fixed.stats(), dynamic.stats());
+        assert_eq!(fixed.last_step(), dynamic.last_step());
+    }
+    assert!(fixed.stats().jac_evals > 1 && fixed.stats().steps > 100);
+    let bytes = to_bytes(&dynamic);
+    assert_eq!(bytes, to_bytes(&fixed), "the states' bytes");
+    let mut restored = Bdf::new(cfg, 0.0, DVector::zeros(4)).unwrap();
+    let mut reader = ByteReader { bytes: &bytes, error: None };
+    restored.visit_state(&mut reader);
+    assert!(reader.error.is_none() && reader.bytes.is_empty());
+    restored.check_state().unwrap();
+    for t in [205.0, 230.0] {
+        dynamic.advance(&dyn_sys, t, f64::INFINITY).unwrap();
+        restored.advance(&dyn_sys, t, f64::INFINITY).unwrap();
+        assert_eq!(dynamic.y().as_slice(), restored.y().as_slice());
+    }
+    // A vector of another length is refused, naming it.
+    let e = dynamic.reinit(230.0, DVector::zeros(3)).unwrap_err();
+    assert!(e.to_string().contains("y"), "{e}");
 }

@@ -7,7 +7,7 @@ use super::dynamics::{BeamBody, Reactions};
 use super::kinematics::{pq, u1, u1_accel_bias};
 use super::phi::{Phi, PhiPiece};
 use crate::solver::{OdeSystem, RangeViolation};
-use nalgebra::{SVector, Vector2, Vector3, Vector4, Vector6};
+use nalgebra::{SVector, Vector2, Vector3, Vector4, Vector6, U4, U6};
 
 /// The range of validity the integration enforces: beyond it the Ritz model of moderately
 /// large deflections (inextensible beam, axial shortening u1 quadratic in v1 and ϑ1) no
@@ -211,7 +211,7 @@ impl TwoDofSystem<'_> {
     }
 }
 
-impl OdeSystem<4> for TwoDofSystem<'_> {
+impl OdeSystem<U4> for TwoDofSystem<'_> {
     fn rhs(&self, t: f64, y: &Vector4<f64>) -> Vector4<f64> {
         let (q, qd) = Self::split(y);
         let acc = self.model.two_dof_accel(self.linear, &self.phi.eval(t), q, qd);
@@ -280,7 +280,7 @@ impl DaeSystem<'_> {
     }
 }
 
-impl OdeSystem<6> for DaeSystem<'_> {
+impl OdeSystem<U6> for DaeSystem<'_> {
     fn rhs(&self, t: f64, y: &Vector6<f64>) -> Vector6<f64> {
         let (x, xd) = Self::split(y);
         let acc = self.model.dae_accel(&self.phi.eval(t), x, xd);

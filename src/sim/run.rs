@@ -12,7 +12,8 @@ use crate::model::{
 use crate::scene::{InitialState, PhiSource, Scene};
 use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
 use crate::visit::StateVisitor;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, SVector, U4, U6};
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
 /// one, so boxing would only add an indirection to every piece.
@@ -53,15 +54,18 @@ pub struct Run {
 
 /// [`Bdf::advance`], whose first step, with `probe`, is a [`Bdf::probe_step`]: the
 /// integrator restarts at its time if the history did not survive a change of f there.
-fn advance_probing<const N: usize, S: OdeSystem<N>>(
-    bdf: &mut Bdf<N>,
+fn advance_probing<D: Dim, S: OdeSystem<D>>(
+    bdf: &mut Bdf<D>,
     sys: &S,
     tout: f64,
     tstop: f64,
     probe: bool,
-) -> Result<(), SolverError> {
+) -> Result<(), SolverError>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     if probe && bdf.t() < tout && bdf.probe_step(sys, tstop)? == StepOutcome::Rejected {
-        bdf.reinit(bdf.t(), *bdf.y())?;
+        bdf.reinit(bdf.t(), bdf.y().clone())?;
     }
     bdf.advance(sys, tout, tstop)
 }
@@ -94,8 +98,8 @@ pub fn dae_start(system: &DaeSystem<'_>, init: &InitialState) -> SVector<f64, 6>
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Integrator {
-    TwoDof(Bdf<4>),
-    Dae(Bdf<6>),
+    TwoDof(Bdf<U4>),
+    Dae(Bdf<U6>),
 }
 
 impl Run {

@@ -14,7 +14,8 @@
 
 use super::error::SolverError;
 use super::snapshot::{require_finite, require_not_below_zero, StateVisitor};
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OVector};
 
 /// Highest BDF order.
 pub(crate) const QMAX: usize = 5;
@@ -230,13 +231,15 @@ fn coeffs_q<const Q: usize>(h: f64, tau: &[f64; NCOL + 1], order_change: bool) -
 /// Nordsieck array of a polynomial through the same history.
 ///
 /// `hscale` is the step the array is scaled with (the last step), `tau` the step history.
-pub(crate) fn raise_order<const N: usize>(
-    zn: &mut [SVector<f64, N>; NCOL],
+pub(crate) fn raise_order<D: Dim>(
+    zn: &mut [OVector<f64, D>; NCOL],
     q: usize,
     hscale: f64,
     tau: &[f64; NCOL + 1],
-    delta: &SVector<f64, N>,
-) {
+    delta: &OVector<f64, D>,
+) where
+    DefaultAllocator: Allocator<D>,
+{
     debug_assert!(q < QMAX);
     // Distances back from t_n in units of hscale: (τ_1 + … + τ_{j+1}) / hscale.
     let mut c = [0.0; NCOL + 1];
@@ -260,18 +263,20 @@ pub(crate) fn raise_order<const N: usize>(
     let a1 = (-alpha0 - alpha1) / prod;
     zn[q + 1] = delta * a1;
     for j in 2..=q {
-        let add = zn[q + 1] * c[j];
+        let add = &zn[q + 1] * c[j];
         zn[j] += add;
     }
 }
 
 /// Lowers the order from q to q−1: drops z_q and adjusts z_2..z_{q−1}.
-pub(crate) fn lower_order<const N: usize>(
-    zn: &mut [SVector<f64, N>; NCOL],
+pub(crate) fn lower_order<D: Dim>(
+    zn: &mut [OVector<f64, D>; NCOL],
     q: usize,
     hscale: f64,
     tau: &[f64; NCOL + 1],
-) {
+) where
+    DefaultAllocator: Allocator<D>,
+{
     debug_assert!(q >= 2);
     let mut c = [0.0; NCOL + 1];
     c[2] = 1.0;
@@ -284,15 +289,16 @@ pub(crate) fn lower_order<const N: usize>(
         }
     }
     for j in 2..q {
-        let sub = zn[q] * c[j];
+        let sub = &zn[q] * c[j];
         zn[j] -= sub;
     }
-    zn[q] = SVector::zeros();
+    zn[q].fill(0.0);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::SVector;
 
     /// At constant step the formula is the classical BDF; its Nordsieck vectors for BDF1–3
     /// are those of Byrne & Hindmarsh (1975), table I.

@@ -1,4 +1,4 @@
-//! Eigenvalues of a small real matrix (N ≤ 8), on the stack, for the stability guard.
+//! Eigenvalues of a real matrix, for the stability guard.
 //!
 //! The classical two-stage method: reduction to upper Hessenberg form by Gaussian
 //! elimination with partial pivoting (a similarity transform), then the implicit Francis
@@ -11,7 +11,8 @@
 //! model it costs about five times as much and allocates, and the guard runs at every
 //! Jacobian evaluation. The unit tests check this routine against nalgebra.
 
-use nalgebra::SMatrix;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix};
 
 /// Iterations allowed in all before giving up: LAPACK dlahqr's ITMAX = 30·max(10, N). Some
 /// matrices need more than EISPACK's 30 per eigenvalue (a random 4×4 in the tests needs 35).
@@ -31,40 +32,41 @@ fn with_sign(a: f64, b: f64) -> f64 {
     }
 }
 
-/// Reduces `a` (row-major) to upper Hessenberg form by stabilised elimination: a similarity
+/// Reduces `a` (n×n, row-major) to upper Hessenberg form by stabilised elimination: a similarity
 /// transform, so the eigenvalues are unchanged. Entries below the subdiagonal are zeroed.
-fn hessenberg<const N: usize>(a: &mut [[f64; N]; N]) {
-    for m in 1..N.saturating_sub(1) {
+fn hessenberg(a: &mut [f64], n: usize) {
+    for m in 1..n.saturating_sub(1) {
         // Pivot: the largest entry of column m−1 on or below row m.
         let mut pivot = m;
-        for i in m + 1..N {
-            if a[i][m - 1].abs() > a[pivot][m - 1].abs() {
+        for i in m + 1..n {
+            if a[i * n + m - 1].abs() > a[pivot * n + m - 1].abs() {
                 pivot = i;
             }
         }
-        let x = a[pivot][m - 1];
+        let x = a[pivot * n + m - 1];
         if pivot != m {
-            a.swap(pivot, m);
-            for row in a.iter_mut() {
-                row.swap(pivot, m);
+            for j in 0..n {
+                a.swap(pivot * n + j, m * n + j);
+            }
+            for row in 0..n {
+                a.swap(row * n + pivot, row * n + m);
             }
         }
         if x == 0.0 {
             continue;
         }
-        for i in m + 1..N {
-            let y = a[i][m - 1] / x;
+        for i in m + 1..n {
+            let y = a[i * n + m - 1] / x;
             if y == 0.0 {
                 continue;
             }
             // Row i −= y·row m, then column m += y·column i (the inverse transform).
-            a[i][m - 1] = 0.0;
-            let row_m = a[m];
-            for (v, pivot_row) in a[i][m..].iter_mut().zip(&row_m[m..]) {
-                *v -= y * pivot_row;
+            a[i * n + m - 1] = 0.0;
+            for j in m..n {
+                a[i * n + j] -= y * a[m * n + j];
             }
-            for row in a.iter_mut() {
-                row[m] += y * row[i];
+            for row in 0..n {
+                a[row * n + m] += y * a[row * n + i];
             }
         }
     }
@@ -75,49 +77,50 @@ fn hessenberg<const N: usize>(a: &mut [[f64; N]; N]) {
 /// has non-finite entries.
 // The reflections update three rows at once, indexed together.
 #[allow(clippy::needless_range_loop)]
-pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(f64, f64); N]> {
+pub(crate) fn eigenvalues<D: Dim>(mat: &OMatrix<f64, D, D>) -> Option<Vec<(f64, f64)>>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
     if !mat.iter().all(|x| x.is_finite()) {
         return None;
     }
-    let mut a = [[0.0; N]; N];
-    for (i, row) in a.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = mat[(i, j)];
-        }
-    }
-    hessenberg(&mut a);
-    let mut out = [(0.0, 0.0); N];
-    if N == 0 {
+    let n = mat.nrows();
+    // Mᵀ in column-major order is M row by row.
+    let mut t = mat.transpose();
+    let a = t.as_mut_slice();
+    hessenberg(a, n);
+    let mut out = vec![(0.0, 0.0); n];
+    if n == 0 {
         return Some(out);
     }
     // Scale for the negligibility tests of zero diagonal blocks.
     let mut norm = 0.0;
-    for (i, row) in a.iter().enumerate() {
-        for v in &row[i.saturating_sub(1)..] {
+    for i in 0..n {
+        for v in &a[i * n + i.saturating_sub(1)..(i + 1) * n] {
             norm += v.abs();
         }
     }
     // `nn`: the last row of the active (undeflated) block; `shift`: the exceptional shifts
     // accumulated so far, subtracted from the diagonal.
-    let mut nn = N - 1;
+    let mut nn = n - 1;
     let mut shift = 0.0;
     let mut iters = 0;
     let mut total = 0;
     loop {
-        // The lowest l ≤ nn such that a[l][l−1] is negligible: rows l..=nn form the block.
+        // The lowest l ≤ nn such that a[l * n + l−1] is negligible: rows l..=nn form the block.
         let mut l = nn;
         while l > 0 {
-            let mut s = a[l - 1][l - 1].abs() + a[l][l].abs();
+            let mut s = a[(l - 1) * n + l - 1].abs() + a[l * n + l].abs();
             if s == 0.0 {
                 s = norm;
             }
-            if a[l][l - 1].abs() + s == s {
-                a[l][l - 1] = 0.0;
+            if a[l * n + l - 1].abs() + s == s {
+                a[l * n + l - 1] = 0.0;
                 break;
             }
             l -= 1;
         }
-        let mut x = a[nn][nn];
+        let mut x = a[nn * n + nn];
         if l == nn {
             // A 1×1 block has split off: one real eigenvalue.
             out[nn] = (x + shift, 0.0);
@@ -128,8 +131,8 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
             }
             continue;
         }
-        let mut y = a[nn - 1][nn - 1];
-        let mut w = a[nn][nn - 1] * a[nn - 1][nn];
+        let mut y = a[(nn - 1) * n + nn - 1];
+        let mut w = a[nn * n + nn - 1] * a[(nn - 1) * n + nn];
         if l + 1 == nn {
             // A 2×2 block: its two eigenvalues in closed form.
             let p = 0.5 * (y - x);
@@ -152,16 +155,16 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
             }
             continue;
         }
-        if total == max_iterations(N) {
+        if total == max_iterations(n) {
             return None;
         }
         if iters > 0 && iters % EXCEPTIONAL_SHIFT_EVERY == 0 {
             // Exceptional shift, to break a cycle (Wilkinson & Reinsch II/14).
             shift += x;
-            for (i, row) in a.iter_mut().enumerate().take(nn + 1) {
-                row[i] -= x;
+            for i in 0..=nn {
+                a[i * n + i] -= x;
             }
-            let s = a[nn][nn - 1].abs() + a[nn - 1][nn - 2].abs();
+            let s = a[nn * n + nn - 1].abs() + a[(nn - 1) * n + nn - 2].abs();
             x = 0.75 * s;
             y = x;
             w = -0.4375 * s * s;
@@ -173,11 +176,11 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
         let mut m = nn - 2;
         let (mut p, mut q, mut r);
         loop {
-            let z = a[m][m];
+            let z = a[m * n + m];
             let (rr, ss) = (x - z, y - z);
-            p = (rr * ss - w) / a[m + 1][m] + a[m][m + 1];
-            q = a[m + 1][m + 1] - z - rr - ss;
-            r = a[m + 2][m + 1];
+            p = (rr * ss - w) / a[(m + 1) * n + m] + a[m * n + m + 1];
+            q = a[(m + 1) * n + m + 1] - z - rr - ss;
+            r = a[(m + 2) * n + m + 1];
             let s = p.abs() + q.abs() + r.abs();
             p /= s;
             q /= s;
@@ -185,17 +188,18 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
             if m == l {
                 break;
             }
-            let u = a[m][m - 1].abs() * (q.abs() + r.abs());
-            let v = p.abs() * (a[m - 1][m - 1].abs() + z.abs() + a[m + 1][m + 1].abs());
+            let u = a[m * n + m - 1].abs() * (q.abs() + r.abs());
+            let v =
+                p.abs() * (a[(m - 1) * n + m - 1].abs() + z.abs() + a[(m + 1) * n + m + 1].abs());
             if u + v == v {
                 break;
             }
             m -= 1;
         }
         for i in m + 2..=nn {
-            a[i][i - 2] = 0.0;
+            a[i * n + i - 2] = 0.0;
             if i != m + 2 {
-                a[i][i - 3] = 0.0;
+                a[i * n + i - 3] = 0.0;
             }
         }
         // Chase the bulge down with 3×3 Householder reflections (rows k..k+2).
@@ -203,9 +207,9 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
             let last = k + 1 == nn;
             let mut scale = 1.0;
             if k != m {
-                p = a[k][k - 1];
-                q = a[k + 1][k - 1];
-                r = if last { 0.0 } else { a[k + 2][k - 1] };
+                p = a[k * n + k - 1];
+                q = a[(k + 1) * n + k - 1];
+                r = if last { 0.0 } else { a[(k + 2) * n + k - 1] };
                 scale = p.abs() + q.abs() + r.abs();
                 if scale == 0.0 {
                     continue;
@@ -220,25 +224,26 @@ pub(crate) fn eigenvalues<const N: usize>(mat: &SMatrix<f64, N, N>) -> Option<[(
             }
             if k == m {
                 if l != m {
-                    a[k][k - 1] = -a[k][k - 1];
+                    a[k * n + k - 1] = -a[k * n + k - 1];
                 }
             } else {
-                a[k][k - 1] = -s * scale;
+                a[k * n + k - 1] = -s * scale;
             }
             p += s;
             let (vx, vy, vz) = (p / s, q / s, r / s);
             q /= p;
             r /= p;
             for j in k..=nn {
-                let mut t = a[k][j] + q * a[k + 1][j];
+                let mut t = a[k * n + j] + q * a[(k + 1) * n + j];
                 if !last {
-                    t += r * a[k + 2][j];
-                    a[k + 2][j] -= t * vz;
+                    t += r * a[(k + 2) * n + j];
+                    a[(k + 2) * n + j] -= t * vz;
                 }
-                a[k + 1][j] -= t * vy;
-                a[k][j] -= t * vx;
+                a[(k + 1) * n + j] -= t * vy;
+                a[k * n + j] -= t * vx;
             }
-            for row in a.iter_mut().take(nn.min(k + 3) + 1).skip(l) {
+            for i in l..=nn.min(k + 3) {
+                let row = &mut a[i * n..(i + 1) * n];
                 let mut t = vx * row[k] + vy * row[k + 1];
                 if !last {
                     t += vz * row[k + 2];
@@ -267,8 +272,7 @@ mod tests {
     }
 
     fn ours<const N: usize>(m: &[f64]) -> Vec<(f64, f64)> {
-        let mut v =
-            eigenvalues(&SMatrix::<f64, N, N>::from_row_slice(m)).expect("converges").to_vec();
+        let mut v = eigenvalues(&SMatrix::<f64, N, N>::from_row_slice(m)).expect("converges");
         v.sort_by(|a, b| a.partial_cmp(b).unwrap());
         v
     }

@@ -16,7 +16,8 @@ use super::eigen::eigenvalues;
 use super::error::SolverError;
 use super::snapshot::{require, visit_usize, StateVisitor};
 use crate::math;
-use nalgebra::SMatrix;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix};
 
 /// The angle α (degrees) of A(α)-stability of BDF_q, index q (Hairer & Wanner II, table V.2.1).
 /// Modes within α of the negative real axis are stable at any step.
@@ -67,7 +68,10 @@ const MAX_ANGLE_DEG: f64 = 95.0;
 const SQUARINGS: usize = 3;
 
 /// The ∞-norm (largest row sum of moduli) of a square matrix.
-fn norm_inf<const N: usize>(m: &SMatrix<f64, N, N>) -> f64 {
+fn norm_inf<D: Dim>(m: &OMatrix<f64, D, D>) -> f64
+where
+    DefaultAllocator: Allocator<D, D>,
+{
     m.row_iter().map(|row| row.iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max)
 }
 
@@ -75,7 +79,10 @@ fn norm_inf<const N: usize>(m: &SMatrix<f64, N, N>) -> f64 {
 /// induced norm is below); for a mechanical system the square matters: ‖J‖ grows with ω²,
 /// ‖J²‖^½ with ω. A J that is not finite may give any bound (a NaN row sum drops out of the
 /// maximum); its modes, when a step asks for them, are none: [`eigenvalues`] refuses it.
-fn radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>) -> f64 {
+fn radius_bound<D: Dim>(jac: &OMatrix<f64, D, D>) -> f64
+where
+    DefaultAllocator: Allocator<D, D>,
+{
     norm_inf(&(jac * jac)).sqrt()
 }
 
@@ -93,7 +100,10 @@ fn radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>) -> f64 {
 /// no squaring it is [`radius_bound`]. Infinite if J is not finite.
 // Out of line: it runs only when a step reaches the first bound's band.
 #[inline(never)]
-fn refined_radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>, squarings: usize) -> f64 {
+fn refined_radius_bound<D: Dim>(jac: &OMatrix<f64, D, D>, squarings: usize) -> f64
+where
+    DefaultAllocator: Allocator<D, D>,
+{
     if !jac.iter().all(|x| x.is_finite()) {
         return f64::INFINITY;
     }
@@ -107,7 +117,7 @@ fn refined_radius_bound<const N: usize>(jac: &SMatrix<f64, N, N>, squarings: usi
             break;
         }
         m /= *scale;
-        m = m * m;
+        m = &m * &m;
     }
     // ρ(J)² ≤ s_1·(s_2·(…·s_k^½)…)^½, folded from the innermost (the loop sets s_1 at least).
     let mut square = scales[used - 1];
@@ -163,7 +173,10 @@ impl StabilityGuard {
     /// computes the modes. On the paper's scene at rtol 1e-5 the first bound sent 27 of 34
     /// Jacobians to the eigenvalues, though no step reached BDF3's band; the refined one sends
     /// 3. The decisions are those of the modes computed at once.
-    pub(crate) fn update<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
+    pub(crate) fn update<D: Dim>(&mut self, jac: &OMatrix<f64, D, D>)
+    where
+        DefaultAllocator: Allocator<D, D>,
+    {
         self.count = 0;
         self.pending = true;
         self.refined = false;
@@ -183,7 +196,10 @@ impl StabilityGuard {
     }
 
     /// A copy with the modes of `jac` computed if they are pending.
-    pub(crate) fn resolved<const N: usize>(&self, jac: &SMatrix<f64, N, N>) -> StabilityGuard {
+    pub(crate) fn resolved<D: Dim>(&self, jac: &OMatrix<f64, D, D>) -> StabilityGuard
+    where
+        DefaultAllocator: Allocator<D, D>,
+    {
         let mut g = self.clone();
         g.resolve(jac);
         g
@@ -192,7 +208,10 @@ impl StabilityGuard {
     /// Stores the oscillatory modes of `jac` if they are pending. If the eigenvalue
     /// iteration fails, no mode is stored and the guard allows any order, as it does without
     /// a Jacobian.
-    pub(crate) fn resolve<const N: usize>(&mut self, jac: &SMatrix<f64, N, N>) {
+    pub(crate) fn resolve<D: Dim>(&mut self, jac: &OMatrix<f64, D, D>)
+    where
+        DefaultAllocator: Allocator<D, D>,
+    {
         if !self.pending {
             return;
         }
@@ -263,12 +282,15 @@ impl StabilityGuard {
     /// The highest order ≤ `q` at which step `h` keeps every mode of `jac`, the Jacobian of
     /// the last [`update`](Self::update), outside the unstable band. The modes are computed
     /// here if the step may need them.
-    pub(crate) fn max_safe_order<const N: usize>(
+    pub(crate) fn max_safe_order<D: Dim>(
         &mut self,
         q: usize,
         h: f64,
-        jac: &SMatrix<f64, N, N>,
-    ) -> usize {
+        jac: &OMatrix<f64, D, D>,
+    ) -> usize
+    where
+        DefaultAllocator: Allocator<D, D>,
+    {
         if self.pending && q >= 3 && h.abs() >= self.unsafe_from[3] {
             if !self.refined {
                 self.refined = true;

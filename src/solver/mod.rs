@@ -1,8 +1,11 @@
 #![forbid(unsafe_code)]
 //! A variable-order, variable-step BDF integrator for small stiff ODE systems.
 //!
-//! Generic over the system size `N` (const generics, stack-only data), independent of the
-//! beam: it sees only an [`OdeSystem`]. No I/O, no `unsafe`.
+//! Generic over the system's dimension `D` (nalgebra's `Dim`): fixed at compile time
+//! (`Const<N>`: the data on the stack, nothing allocated by a step; the paper's two-coordinate
+//! model) or at run time (`Dyn`: on the heap; the beam of n elements). The code is the same,
+//! and for a fixed dimension it compiles to what a const-generic solver would. Independent of
+//! the beam: it sees only an [`OdeSystem`]. No I/O, no `unsafe`.
 
 /// `$e` with `$Q` a constant equal to the order `$q` (1..=QMAX; QMAX for anything larger),
 /// so that loops over the order unroll: the order changes seldom, and a loop of one to six

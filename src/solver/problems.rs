@@ -4,7 +4,7 @@
 
 use super::{Bdf, BdfConfig, OdeSystem, SolverError, Stats};
 use crate::math;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{SMatrix, SVector, U4};
 
 /// A slow motion and an undamped fast oscillator whose amplitude (1e-9) lies below the
 /// absolute tolerance, so the error controller does not resolve it.
@@ -20,7 +20,7 @@ pub struct SlowAndFast {
     pub slow_oscillates: bool,
 }
 
-impl OdeSystem<4> for SlowAndFast {
+impl OdeSystem<U4> for SlowAndFast {
     fn rhs(&self, t: f64, y: &SVector<f64, 4>) -> SVector<f64, 4> {
         let (slow0, slow2) =
             if self.slow_oscillates { (y[2], -y[0]) } else { (-0.5 * (y[0] - math::sin(t)), 0.0) };

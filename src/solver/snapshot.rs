@@ -11,7 +11,8 @@
 //! integrator could not have produced, before the state is used.
 
 use super::error::SolverError;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 pub use crate::visit::{visit_usize, StateVisitor};
 
@@ -23,22 +24,26 @@ pub use crate::visit::{visit_usize, StateVisitor};
 pub(crate) const MAX_COUNT: u64 = 1 << 53;
 
 /// Visits the components of a vector in index order.
-pub(crate) fn visit_vector<V: StateVisitor + ?Sized, const N: usize>(
+pub(crate) fn visit_vector<V: StateVisitor + ?Sized, D: Dim>(
     v: &mut V,
     name: &'static str,
-    x: &mut SVector<f64, N>,
-) {
+    x: &mut OVector<f64, D>,
+) where
+    DefaultAllocator: Allocator<D>,
+{
     for e in x.iter_mut() {
         v.real(name, e);
     }
 }
 
 /// Visits the entries of a matrix in column-major order.
-pub(crate) fn visit_matrix<V: StateVisitor + ?Sized, const N: usize>(
+pub(crate) fn visit_matrix<V: StateVisitor + ?Sized, D: Dim>(
     v: &mut V,
     name: &'static str,
-    x: &mut SMatrix<f64, N, N>,
-) {
+    x: &mut OMatrix<f64, D, D>,
+) where
+    DefaultAllocator: Allocator<D, D>,
+{
     for e in x.iter_mut() {
         v.real(name, e);
     }
@@ -82,6 +87,7 @@ mod tests {
     use super::*;
     use crate::math;
     use crate::solver::{Bdf, BdfConfig, FixedStep, OdeSystem, StepOutcome};
+    use nalgebra::{SVector, U4};
 
     /// What a slot of a written state holds.
     #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,7 +145,10 @@ mod tests {
         }
     }
 
-    fn write<const N: usize>(s: &Bdf<N>) -> Writer {
+    fn write<D: Dim>(s: &Bdf<D>) -> Writer
+    where
+        DefaultAllocator: Allocator<D> + Allocator<D, D>,
+    {
         // Visit a clone: writing must not need (or make) changes to the original.
         let mut copy = s.clone();
         let mut w = Writer::default();
@@ -149,7 +158,7 @@ mod tests {
     }
 
     /// Reads `data` into a fresh solver built with `cfg`, then checks it.
-    fn read<const N: usize>(cfg: &BdfConfig, data: &[u64]) -> Result<Bdf<N>, SolverError> {
+    fn read(cfg: &BdfConfig, data: &[u64]) -> Result<Bdf<U4>, SolverError> {
         let mut s = Bdf::new(*cfg, 0.0, SVector::zeros()).unwrap();
         let mut r = Reader { data, pos: 0 };
         s.visit_state(&mut r);
@@ -164,7 +173,7 @@ mod tests {
     /// Jacobian: J is by differences.
     struct LagsAndFast;
 
-    impl OdeSystem<4> for LagsAndFast {
+    impl OdeSystem<U4> for LagsAndFast {
         fn rhs(&self, t: f64, y: &SVector<f64, 4>) -> SVector<f64, 4> {
             let (w, zeta) = (60.0, 0.01);
             SVector::<f64, 4>::new(
@@ -188,11 +197,10 @@ mod tests {
 
     /// One step of `s`, and its dense output at a few points of the step, as comparable text
     /// (errors included).
-    fn step_and_sample<const N: usize, S: OdeSystem<N>>(
-        s: &mut Bdf<N>,
-        sys: &S,
-        tstop: f64,
-    ) -> String {
+    fn step_and_sample<D: Dim, S: OdeSystem<D>>(s: &mut Bdf<D>, sys: &S, tstop: f64) -> String
+    where
+        DefaultAllocator: Allocator<D> + Allocator<D, D>,
+    {
         let outcome = s.step(sys, tstop);
         let (_, hu) = s.last_step();
         let samples: Vec<_> =
@@ -202,8 +210,8 @@ mod tests {
 
     /// Restores `original`'s state into a fresh solver, then steps both `steps` times and
     /// requires every state, outcome, dense output and counter to agree bit for bit.
-    fn assert_restored_continues<const N: usize, S: OdeSystem<N>>(
-        original: &Bdf<N>,
+    fn assert_restored_continues<S: OdeSystem<U4>>(
+        original: &Bdf<U4>,
         sys: &S,
         tstop: f64,
         steps: usize,
@@ -349,7 +357,7 @@ mod tests {
     #[test]
     fn restored_state_after_a_failure_continues_bit_for_bit() {
         struct Blowup;
-        impl OdeSystem<4> for Blowup {
+        impl OdeSystem<U4> for Blowup {
             fn rhs(&self, t: f64, y: &SVector<f64, 4>) -> SVector<f64, 4> {
                 let f = LagsAndFast.rhs(t, y);
                 if t > 0.5 {
@@ -365,7 +373,7 @@ mod tests {
     }
 
     /// A mid-run state with an LU, guard modes and every counter non-zero.
-    fn mid_run_state() -> Bdf<4> {
+    fn mid_run_state() -> Bdf<U4> {
         let mut s = Bdf::new(cfg(), 0.0, y0()).unwrap();
         s.advance(&LagsAndFast, 12.0, f64::INFINITY).unwrap();
         s
@@ -446,7 +454,7 @@ mod tests {
             for &(i, v) in changes {
                 data[i] = v;
             }
-            read::<4>(&cfg, &data).map(|_| ()).map_err(|e| match e {
+            read(&cfg, &data).map(|_| ()).map_err(|e| match e {
                 SolverError::InvalidState { field } => field,
                 e => panic!("{e}"),
             })
@@ -461,10 +469,7 @@ mod tests {
         let q = s.last_step().0;
         assert!(q >= 2, "order {q}");
         let lower = BdfConfig { max_order: q - 1, ..cfg };
-        assert_eq!(
-            read::<4>(&lower, &w.data).unwrap_err(),
-            SolverError::InvalidState { field: "q" }
-        );
+        assert_eq!(read(&lower, &w.data).unwrap_err(), SolverError::InvalidState { field: "q" });
         // Negative values.
         assert_eq!(with(&[(slot("hscale", 0), (-1e-3f64).to_bits())]), Err("hscale"));
         assert_eq!(with(&[(slot("h_next", 0), (-1e-3f64).to_bits())]), Err("h_next"));

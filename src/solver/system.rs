@@ -1,4 +1,5 @@
-use nalgebra::{SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 /// A state outside the region where a system's equations hold (see
 /// [`OdeSystem::check_range`]): the component, its value and the allowed range in words.
@@ -9,14 +10,18 @@ pub struct RangeViolation {
     pub allowed: &'static str,
 }
 
-/// A first-order system `y' = f(t, y)` of `N` equations.
-pub trait OdeSystem<const N: usize> {
+/// A first-order system `y' = f(t, y)` in dimension `D`: a number fixed at compile time
+/// (`Const<N>`, the state on the stack) or at run time (`Dyn`, on the heap).
+pub trait OdeSystem<D: Dim>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     /// The right-hand side `f(t, y)`.
-    fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N>;
+    fn rhs(&self, t: f64, y: &OVector<f64, D>) -> OVector<f64, D>;
 
     /// The Jacobian `∂f/∂y`, when the system has an analytic one. `None` (the default) makes
     /// the solver use forward differences.
-    fn jacobian(&self, _t: f64, _y: &SVector<f64, N>) -> Option<SMatrix<f64, N, N>> {
+    fn jacobian(&self, _t: f64, _y: &OVector<f64, D>) -> Option<OMatrix<f64, D, D>> {
         None
     }
 
@@ -25,7 +30,7 @@ pub trait OdeSystem<const N: usize> {
     /// projection. The projected point must be close to `y`: the difference is added to the
     /// step's correction. The error test uses the error estimate e projected as
     /// P(P(y) + e) − P(y), so it should be smooth near the manifold.
-    fn project(&self, _t: f64, _y: &SVector<f64, N>) -> Option<SVector<f64, N>> {
+    fn project(&self, _t: f64, _y: &OVector<f64, D>) -> Option<OVector<f64, D>> {
         None
     }
 
@@ -33,7 +38,7 @@ pub trait OdeSystem<const N: usize> {
     /// every accepted step: a violation stops the integration with
     /// [`SolverError::OutOfRange`](super::SolverError::OutOfRange) at that step. The
     /// default accepts every state.
-    fn check_range(&self, _t: f64, _y: &SVector<f64, N>) -> Result<(), RangeViolation> {
+    fn check_range(&self, _t: f64, _y: &OVector<f64, D>) -> Result<(), RangeViolation> {
         Ok(())
     }
 }

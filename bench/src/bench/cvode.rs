@@ -43,7 +43,7 @@ use std::sync::OnceLock;
 use beam_body::model::PhiPiece;
 use beam_body::solver::OdeSystem;
 use libloading::Library;
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
 
 use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
 
@@ -294,7 +294,7 @@ impl WithSystem for Cvode<'_> {
     type Output = Result<Outcome, String>;
     fn apply<const N: usize, S, F>(self, system: F, y0: SVector<f64, N>) -> Self::Output
     where
-        S: OdeSystem<N> + Copy,
+        S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S,
     {
         solve(self.api, self.problem, self.rtol, system, y0)
@@ -355,7 +355,7 @@ unsafe fn values<'v, const N: usize>(v: NVector) -> &'v mut [f64; N] {
     &mut *(content.data as *mut [f64; N])
 }
 
-unsafe extern "C" fn rhs<S: OdeSystem<N> + Copy, const N: usize>(
+unsafe extern "C" fn rhs<S: OdeSystem<Const<N>> + Copy, const N: usize>(
     t: f64,
     y: NVector,
     ydot: NVector,
@@ -391,7 +391,7 @@ unsafe extern "C" fn rhs<S: OdeSystem<N> + Copy, const N: usize>(
 /// (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2) to (v1, ϑ1, u1(v1, ϑ1), v̇1, ϑ̇1, −p v̇1 − l q ϑ̇1), a polynomial of
 /// degree 2 (u1 is quadratic, p and q linear), so the central difference
 /// (P(y + e) − P(y − e))/2 is its derivative along e exactly, up to round-off.
-unsafe extern "C" fn project<S: OdeSystem<N> + Copy, const N: usize>(
+unsafe extern "C" fn project<S: OdeSystem<Const<N>> + Copy, const N: usize>(
     t: f64,
     ycur: NVector,
     corr: NVector,
@@ -558,7 +558,7 @@ fn solve<S, const N: usize>(
     y0: SVector<f64, N>,
 ) -> Result<Outcome, String>
 where
-    S: OdeSystem<N> + Copy,
+    S: OdeSystem<Const<N>> + Copy,
 {
     let scene = &problem.scene;
     let law = scene.law;

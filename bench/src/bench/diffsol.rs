@@ -31,7 +31,7 @@ use diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Op, Vector,
 };
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
 
 use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
 
@@ -51,7 +51,7 @@ impl WithSystem for Diffsol<'_> {
     type Output = Result<Outcome, String>;
     fn apply<const N: usize, S, F>(self, system: F, y0: SVector<f64, N>) -> Self::Output
     where
-        S: OdeSystem<N> + Copy,
+        S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S,
     {
         solve(self.problem, self.rtol, system, y0)
@@ -89,7 +89,7 @@ fn solve<S, const N: usize>(
     y0: SVector<f64, N>,
 ) -> Result<Outcome, String>
 where
-    S: OdeSystem<N> + Copy,
+    S: OdeSystem<Const<N>> + Copy,
 {
     let law = problem.scene.law;
     let grid = &problem.grid;
@@ -118,7 +118,11 @@ where
 }
 
 /// A grid row: the state, projected where the system projects (`DaeSystem::outputs`).
-fn row<S: OdeSystem<N>, const N: usize>(system: &S, t: f64, y: SVector<f64, N>) -> SVector<f64, N> {
+fn row<S: OdeSystem<Const<N>>, const N: usize>(
+    system: &S,
+    t: f64,
+    y: SVector<f64, N>,
+) -> SVector<f64, N> {
     system.project(t, &y).unwrap_or(y)
 }
 
@@ -128,7 +132,7 @@ type Base<const N: usize> = (f64, SVector<f64, N>, SVector<f64, N>);
 /// Integrates `system` from (`t0`, `y0`) to exactly `t1`, pushing the rows at `times` (in
 /// (t0, t1]) onto `states`; returns the state at `t1`.
 #[allow(clippy::too_many_arguments)]
-fn segment<S: OdeSystem<N> + Copy, const N: usize>(
+fn segment<S: OdeSystem<Const<N>> + Copy, const N: usize>(
     system: S,
     t0: f64,
     y0: SVector<f64, N>,

@@ -45,7 +45,7 @@ use std::time::{Duration, Instant};
 
 use beam_body::model::{BeamBody, DaeSystem, Formulation, TwoDofSystem};
 use beam_body::solver::{Lu, OdeSystem};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Const, SMatrix, SVector};
 
 use crate::{cargo, project_root, python, relative, run_cmd, target_dir, write_text, Mode, Result};
 use problem::{state_names, Counters, Outcome, Problem, SCENES};
@@ -753,7 +753,7 @@ struct Costs {
     solve_throughput: f64,
 }
 
-fn costs<const N: usize>(sys: &impl OdeSystem<N>, t: f64, y: SVector<f64, N>) -> Costs {
+fn costs<const N: usize>(sys: &impl OdeSystem<Const<N>>, t: f64, y: SVector<f64, N>) -> Costs {
     // 10⁻³⁰⁰·x is far below an ulp of y: the chained arguments stay y.
     const TINY: f64 = 1e-300;
     let rhs_throughput = median_ns(|| {

@@ -7,7 +7,7 @@ use std::path::Path;
 use beam_body::model::{BeamBody, Formulation, PhiPiece};
 use beam_body::sim::{self, Scene};
 use beam_body::solver::OdeSystem;
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
 
 use crate::{project_root, relative};
 
@@ -28,7 +28,7 @@ pub trait WithSystem {
     /// `system` builds the formulation's system for a piece of φ; `y0` is the initial state.
     fn apply<const N: usize, S, F>(self, system: F, y0: SVector<f64, N>) -> Self::Output
     where
-        S: OdeSystem<N> + Copy,
+        S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S;
 }
 

@@ -26,7 +26,7 @@ use beam_body::sim::SimError;
 use beam_body::sim::{simulate, Scene};
 use beam_body::solver::problems::SlowAndFast;
 use beam_body::solver::{OdeSystem, SolverError};
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
 
 use crate::bench::problem::{with_system, WithSystem};
 use crate::{cargo, relative, run_cmd, target_dir, write_text, Mode, Result};
@@ -378,7 +378,7 @@ impl WithSystem for Reference<'_> {
     type Output = std::result::Result<Vec<[f64; 4]>, RefError>;
     fn apply<const N: usize, S, F>(self, system: F, y0: SVector<f64, N>) -> Self::Output
     where
-        S: OdeSystem<N> + Copy,
+        S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S,
     {
         let mut r = Dopri5::new(0.0, y0, self.rtol, 1e-3 * self.rtol, 50_000_000);
@@ -396,7 +396,7 @@ impl WithSystem for Reference<'_> {
 
 /// Advances the reference to `t`, stopping at the law's breakpoint t_rot on the way so that
 /// each step sees one smooth piece of φ.
-fn advance_piecewise<const N: usize, S: OdeSystem<N>>(
+fn advance_piecewise<const N: usize, S: OdeSystem<Const<N>>>(
     r: &mut Dopri5<N>,
     t: f64,
     law: PaperLaw,

@@ -12,7 +12,7 @@
 //! with `max_steps`.
 
 use beam_body::solver::OdeSystem;
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
 
 // Butcher tableau (Dormand & Prince 1980, table 2): nodes c, stages a, 5th-order weights b
 // (equal to the last stage row: the method is FSAL) and the error weights e = b − b̂.
@@ -89,7 +89,7 @@ impl<const N: usize> Dopri5<N> {
     /// Integrates to exactly `t_out` (the last step is shortened to land on it). Within the
     /// call the last stage serves as the next first stage (FSAL); each call starts afresh,
     /// so `sys` may differ between calls (a new piece of φ).
-    pub fn advance<S: OdeSystem<N>>(&mut self, sys: &S, t_out: f64) -> Result<(), RefError> {
+    pub fn advance<S: OdeSystem<Const<N>>>(&mut self, sys: &S, t_out: f64) -> Result<(), RefError> {
         let mut f0 = sys.rhs(self.t, &self.y);
         if self.h == 0.0 {
             // A first step from the size of y and f (Hairer, Nørsett & Wanner I, §II.4).
@@ -183,7 +183,7 @@ mod tests {
     use nalgebra::Vector2;
 
     struct Oscillator;
-    impl OdeSystem<2> for Oscillator {
+    impl OdeSystem<Const<2>> for Oscillator {
         fn rhs(&self, _t: f64, y: &Vector2<f64>) -> Vector2<f64> {
             Vector2::new(y[1], -y[0])
         }
@@ -208,7 +208,7 @@ mod tests {
     #[test]
     fn stops_where_the_system_leaves_its_range() {
         struct Ramp;
-        impl OdeSystem<1> for Ramp {
+        impl OdeSystem<Const<1>> for Ramp {
             fn rhs(&self, _t: f64, _y: &SVector<f64, 1>) -> SVector<f64, 1> {
                 SVector::<f64, 1>::new(1.0)
             }

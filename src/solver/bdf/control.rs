@@ -64,7 +64,10 @@ pub(super) fn root(x: f64, k: usize) -> f64 {
     }
 }
 
-impl<const N: usize> Bdf<N> {
+impl<D: Dim> Bdf<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     /// Chooses the order and step of the next step from the error estimates at orders q−1,
     /// q and q+1 (CVODE cvPrepareNextStep / cvChooseEta / cvSetEta), then applies the
     /// stability guard.
@@ -154,7 +157,7 @@ impl<const N: usize> Bdf<N> {
         if q != qmax && self.saved_tq5 != 0.0 {
             let ratio = (self.coeffs.tq[5] / self.saved_tq5)
                 * math::powi(self.h / self.tau[2], q as i32 + 1);
-            let diff = self.acor - self.zn[qmax] * ratio;
+            let diff = &self.acor - &self.zn[qmax] * ratio;
             let tq3 = self.coeffs.tq[3];
             up_sq.0 = BIAS_UP * BIAS_UP * (self.wrms_squared(&diff) * (tq3 * tq3));
         }
@@ -173,7 +176,7 @@ impl<const N: usize> Bdf<N> {
         } else if root_less(up, best) {
             best = up;
             q_next = q + 1;
-            self.zn[qmax] = self.acor;
+            self.zn[qmax].copy_from(&self.acor);
         }
         let (bias_err, k) = best;
         if self.capped(bias_err, k) {
@@ -241,7 +244,7 @@ impl<const N: usize> Bdf<N> {
     /// After a failed error test (CVODE cvDoErrorTest's failure branch): gives up after
     /// MAX_ERROR_FAILURES; else shrinks the step by the error's ratio, then, after repeated
     /// failures, drops the order, and at order 1 restarts from a fresh derivative.
-    pub(super) fn handle_error_test_failure<S: OdeSystem<N>>(
+    pub(super) fn handle_error_test_failure<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         dsm: f64,
@@ -277,7 +280,7 @@ impl<const N: usize> Bdf<N> {
             self.hscale = self.h;
             self.landing = None;
             self.qwait = LONG_WAIT;
-            let (t, y) = (self.t, self.zn[0]);
+            let (t, y) = (self.t, self.zn[0].clone());
             let f = self.eval_rhs(sys, t, &y);
             if !f.iter().all(|v| v.is_finite()) {
                 return Err(SolverError::NonFiniteRhs { t: self.t });

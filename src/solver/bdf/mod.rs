@@ -4,7 +4,7 @@
 //! Step and order selection, Newton convergence and Jacobian/LU reuse follow the CVODE
 //! description (Hindmarsh et al., "SUNDIALS", ACM TOMS 31 (2005), §2.1, and the SUNDIALS
 //! CVODE user guide, "Mathematical considerations"); every constant below names its source.
-//! All data live on the stack: a step allocates nothing.
+//! With a fixed dimension all data live on the stack and a step allocates nothing.
 
 use super::coeffs::{lower_order, raise_order, StepCoeffs, NCOL, QMAX};
 use super::config::BdfConfig;
@@ -18,7 +18,8 @@ use super::snapshot::{
 use super::stats::Stats;
 use super::system::{OdeSystem, RangeViolation};
 use crate::math;
-use nalgebra::{SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 mod control;
 mod newton;
@@ -132,14 +133,17 @@ struct Failures {
 /// The integrator state: history, order, step, Newton matrix, counters. `Clone` copies all of
 /// it, so a clone continues exactly as the original would (FMU state save and restore).
 #[derive(Clone, Debug)]
-pub struct Bdf<const N: usize> {
+pub struct Bdf<D: Dim>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     cfg: BdfConfig,
     /// Absolute tolerance per state: `cfg.atol()` for each, unless [`set_atol`](Self::set_atol).
-    atol: SVector<f64, N>,
+    atol: OVector<f64, D>,
     /// t_n, the time of the last accepted step.
     t: f64,
     /// Nordsieck array z_j = hscale^j y^(j)(t_n)/j!.
-    zn: [SVector<f64, N>; NCOL],
+    zn: [OVector<f64, D>; NCOL],
     /// The step the columns of `zn` are scaled with.
     hscale: f64,
     /// Size of the step being attempted (after the pending change is applied).
@@ -160,15 +164,15 @@ pub struct Bdf<const N: usize> {
     hu: f64,
     qu: usize,
     /// The last accepted correction and its norm.
-    acor: SVector<f64, N>,
+    acor: OVector<f64, D>,
     /// Error weights 1/(rtol|y| + atol).
-    ewt: SVector<f64, N>,
+    ewt: OVector<f64, D>,
     /// Cap on the next step-size ratio.
     eta_max: f64,
     /// Newton: Jacobian, LU of I − γ_p·J, γ = h/l_1, the γ_p of the LU, convergence rate.
-    jac: SMatrix<f64, N, N>,
+    jac: OMatrix<f64, D, D>,
     jac_valid: bool,
-    lu: Option<Lu<N>>,
+    lu: Option<Lu<D>>,
     gamma: f64,
     gamma_lu: f64,
     /// What the Newton iteration derives from γ, γ of the LU and the coefficients, which
@@ -187,17 +191,21 @@ pub struct Bdf<const N: usize> {
     stats: Stats,
 }
 
-impl<const N: usize> Bdf<N> {
+impl<D: Dim> Bdf<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     /// A solver at `(t0, y0)`. Nothing is evaluated until the first step.
-    pub fn new(cfg: BdfConfig, t0: f64, y0: SVector<f64, N>) -> Result<Self, SolverError> {
+    pub fn new(cfg: BdfConfig, t0: f64, y0: OVector<f64, D>) -> Result<Self, SolverError> {
         cfg.validate()?;
         if !t0.is_finite() || !y0.iter().all(|v| v.is_finite()) {
             return Err(SolverError::NonFiniteState { t: t0 });
         }
-        let mut zn = [SVector::zeros(); NCOL];
+        let d = y0.shape_generic().0;
+        let mut zn = std::array::from_fn(|_| OVector::zeros_generic(d, U1));
         zn[0] = y0;
         let mut bdf = Self {
-            atol: SVector::from_element(cfg.atol()),
+            atol: OVector::from_element_generic(d, U1, cfg.atol()),
             cfg,
             t: t0,
             zn,
@@ -212,10 +220,10 @@ impl<const N: usize> Bdf<N> {
             saved_tq5: 0.0,
             hu: 0.0,
             qu: 0,
-            acor: SVector::zeros(),
-            ewt: SVector::zeros(),
+            acor: OVector::zeros_generic(d, U1),
+            ewt: OVector::zeros_generic(d, U1),
             eta_max: ETA_MAX_FIRST,
-            jac: SMatrix::zeros(),
+            jac: OMatrix::zeros_generic(d, d),
             jac_valid: false,
             lu: None,
             gamma: 0.0,
@@ -236,7 +244,8 @@ impl<const N: usize> Bdf<N> {
 
     /// A different absolute tolerance for each state, each positive and finite (the uniform
     /// `cfg.atol()` otherwise), before the first step.
-    pub fn set_atol(&mut self, atol: SVector<f64, N>) -> Result<(), SolverError> {
+    pub fn set_atol(&mut self, atol: OVector<f64, D>) -> Result<(), SolverError> {
+        self.check_dimension("atol", atol.len())?;
         if let Some(a) = atol.iter().find(|a| !(a.is_finite() && **a > 0.0)) {
             let allowed = "positive and finite";
             return Err(SolverError::InvalidConfig { field: "atol", value: *a, allowed });
@@ -247,12 +256,15 @@ impl<const N: usize> Bdf<N> {
 
     /// Restarts at `(t, y)` with order 1, for a discontinuity of f or of the state. Settings,
     /// counters and the Jacobian are kept; the step history is dropped.
-    pub fn reinit(&mut self, t: f64, y: SVector<f64, N>) -> Result<(), SolverError> {
+    pub fn reinit(&mut self, t: f64, y: OVector<f64, D>) -> Result<(), SolverError> {
+        self.check_dimension("y", y.len())?;
         if !t.is_finite() || !y.iter().all(|v| v.is_finite()) {
             return Err(SolverError::NonFiniteState { t });
         }
         self.t = t;
-        self.zn = [SVector::zeros(); NCOL];
+        for z in self.zn.iter_mut().skip(1) {
+            z.fill(0.0);
+        }
         self.zn[0] = y;
         self.q = 1;
         self.q_next = 1;
@@ -276,7 +288,7 @@ impl<const N: usize> Bdf<N> {
     pub fn set_history(
         &mut self,
         h: f64,
-        derivatives: &[SVector<f64, N>],
+        derivatives: &[OVector<f64, D>],
     ) -> Result<(), SolverError> {
         let q = derivatives.len().saturating_sub(1);
         if !(1..=self.max_order()).contains(&q) {
@@ -289,6 +301,9 @@ impl<const N: usize> Bdf<N> {
                 value: h,
                 allowed: "positive and finite",
             });
+        }
+        for d in derivatives {
+            self.check_dimension("history", d.len())?;
         }
         if !derivatives.iter().all(|d| d.iter().all(|v| v.is_finite())) {
             return Err(SolverError::NonFiniteState { t: self.t });
@@ -315,13 +330,28 @@ impl<const N: usize> Bdf<N> {
         Ok(())
     }
 
+    /// The number of equations.
+    pub fn dimension(&self) -> usize {
+        self.zn[0].len()
+    }
+
+    /// A vector given for `field` must have the solver's dimension (a run-time dimension
+    /// may differ; a fixed one cannot).
+    fn check_dimension(&self, field: &'static str, len: usize) -> Result<(), SolverError> {
+        if len == self.dimension() {
+            return Ok(());
+        }
+        let allowed = "a vector of the solver's dimension";
+        Err(SolverError::InvalidConfig { field, value: len as f64, allowed })
+    }
+
     /// Time of the last accepted step.
     pub fn t(&self) -> f64 {
         self.t
     }
 
     /// State at [`t`](Self::t).
-    pub fn y(&self) -> &SVector<f64, N> {
+    pub fn y(&self) -> &OVector<f64, D> {
         &self.zn[0]
     }
 
@@ -356,14 +386,14 @@ impl<const N: usize> Bdf<N> {
 
     /// The state at `t` inside the last step `[t_n − h_u, t_n]`, from the Nordsieck
     /// polynomial (dense output, CVODE's CVodeGetDky with k = 0).
-    pub fn interpolate(&self, t: f64) -> Result<SVector<f64, N>, SolverError> {
+    pub fn interpolate(&self, t: f64) -> Result<OVector<f64, D>, SolverError> {
         let lo = self.t - self.hu;
         let fuzz = 100.0 * f64::EPSILON * (self.t.abs() + self.hu.abs());
         if !(t >= lo - fuzz && t <= self.t + fuzz) {
             return Err(SolverError::OutsideLastStep { t, lo, hi: self.t });
         }
         if !self.started || t == self.t {
-            return Ok(self.zn[0]);
+            return Ok(self.zn[0].clone());
         }
         let s = (t - self.t) / self.hscale;
         // Estrin's scheme: pairs z_j + s·z_{j+1} combined with powers of s², a chain of
@@ -371,11 +401,11 @@ impl<const N: usize> Bdf<N> {
         let z = &self.zn;
         let s2 = s * s;
         Ok(match self.q {
-            1 => z[0] + z[1] * s,
-            2 => (z[0] + z[1] * s) + z[2] * s2,
-            3 => (z[0] + z[1] * s) + (z[2] + z[3] * s) * s2,
-            4 => (z[0] + z[1] * s) + ((z[2] + z[3] * s) + z[4] * s2) * s2,
-            _ => (z[0] + z[1] * s) + ((z[2] + z[3] * s) + (z[4] + z[5] * s) * s2) * s2,
+            1 => &z[0] + &z[1] * s,
+            2 => (&z[0] + &z[1] * s) + &z[2] * s2,
+            3 => (&z[0] + &z[1] * s) + (&z[2] + &z[3] * s) * s2,
+            4 => (&z[0] + &z[1] * s) + ((&z[2] + &z[3] * s) + &z[4] * s2) * s2,
+            _ => (&z[0] + &z[1] * s) + ((&z[2] + &z[3] * s) + (&z[4] + &z[5] * s) * s2) * s2,
         })
     }
 
@@ -390,7 +420,7 @@ impl<const N: usize> Bdf<N> {
     /// Steps until `t ≥ tout`, never past `tstop` (use `tstop = tout` to end exactly there;
     /// `f64::INFINITY` for no stop). Then [`interpolate`](Self::interpolate) gives y(tout).
     /// A `tout` already inside the last step takes no step.
-    pub fn advance<S: OdeSystem<N>>(
+    pub fn advance<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         tout: f64,
@@ -417,7 +447,7 @@ impl<const N: usize> Bdf<N> {
     /// ends exactly on it. As CVODE's cvStep: attempts until one converges and passes the
     /// error test, each failure handled by its own function (cvHandleNFlag,
     /// cvHandleErrorTestFailure), then the completion and the choice of the next step.
-    pub fn step<S: OdeSystem<N>>(
+    pub fn step<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         tstop: f64,
@@ -431,7 +461,7 @@ impl<const N: usize> Bdf<N> {
     /// the change did not fit in the history: the solver is left at t_n (y_n unchanged, the
     /// failure counted) and returns [`StepOutcome::Rejected`], for the caller to
     /// [`reinit`](Self::reinit) it there. Otherwise as [`step`](Self::step).
-    pub fn probe_step<S: OdeSystem<N>>(
+    pub fn probe_step<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         tstop: f64,
@@ -439,7 +469,7 @@ impl<const N: usize> Bdf<N> {
         self.attempt_step(sys, tstop, true)
     }
 
-    fn attempt_step<S: OdeSystem<N>>(
+    fn attempt_step<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         tstop: f64,
@@ -503,11 +533,11 @@ impl<const N: usize> Bdf<N> {
     /// and the error test measures the local error estimate projected onto the manifold
     /// (CVODE's default, CVodeSetProjErrEst), here as P(y + e) − P(y): the normal part of the
     /// correction is not an error of the step.
-    fn local_error<S: OdeSystem<N>>(&mut self, sys: &S) -> f64 {
+    fn local_error<S: OdeSystem<D>>(&mut self, sys: &S) -> f64 {
         let mut projected_error = None;
-        if let Some(yp) = sys.project(self.t, &(self.zn[0] + self.acor)) {
-            projected_error = sys.project(self.t, &(yp + self.acor)).map(|y| y - yp);
-            self.acor = yp - self.zn[0];
+        if let Some(yp) = sys.project(self.t, &(&self.zn[0] + &self.acor)) {
+            projected_error = sys.project(self.t, &(&yp + &self.acor)).map(|y| y - &yp);
+            self.acor = yp - &self.zn[0];
         }
         let tq2 = self.coeffs.tq[2];
         self.wrms_squared(projected_error.as_ref().unwrap_or(&self.acor)) * (tq2 * tq2)
@@ -516,10 +546,10 @@ impl<const N: usize> Bdf<N> {
     // ----- state save and restore (FMI) --------------------------------------------------
 
     /// First step after `new` or `reinit`: f(t0, y0), the initial step size, order 1.
-    fn start<S: OdeSystem<N>>(&mut self, sys: &S, tstop: f64) -> Result<(), SolverError> {
+    fn start<S: OdeSystem<D>>(&mut self, sys: &S, tstop: f64) -> Result<(), SolverError> {
         self.stats.restarts += 1;
         self.update_weights();
-        let (t0, y0) = (self.t, self.zn[0]);
+        let (t0, y0) = (self.t, self.zn[0].clone());
         let f0 = self.eval_rhs(sys, t0, &y0);
         if !f0.iter().all(|v| v.is_finite()) {
             return Err(SolverError::NonFiniteRhs { t: self.t });
@@ -550,12 +580,12 @@ impl<const N: usize> Bdf<N> {
     /// Initial step: the BDF1 local error h²/2·‖y''‖ set to half the tolerance, with y''
     /// estimated by a difference of f along an explicit Euler probe (in the spirit of Hairer,
     /// Nørsett & Wanner I, §II.4, and CVODE's cvHin).
-    fn initial_step<S: OdeSystem<N>>(&mut self, sys: &S, f0: &SVector<f64, N>, span: f64) -> f64 {
+    fn initial_step<S: OdeSystem<D>>(&mut self, sys: &S, f0: &OVector<f64, D>, span: f64) -> f64 {
         let span = if span.is_finite() { span } else { 1.0e3 };
         let d1 = self.wrms(f0);
         let mut probe = if d1 > 1e-5 { 0.01 / d1 } else { 1e-6 };
         probe = probe.min(0.01 * span).max(1e-12 * (1.0 + self.t.abs()));
-        let y1 = self.zn[0] + f0 * probe;
+        let y1 = &self.zn[0] + f0 * probe;
         let f1 = self.eval_rhs(sys, self.t + probe, &y1);
         let d2 = if f1.iter().all(|v| v.is_finite()) { self.wrms(&(f1 - f0)) / probe } else { 0.0 };
         let h = if d2 > 1e-300 { (0.5 / d2).sqrt() } else { 100.0 * probe };
@@ -565,7 +595,7 @@ impl<const N: usize> Bdf<N> {
     /// Applies the order and step chosen after the last step, clipped to `tstop`.
     fn apply_pending(&mut self, tstop: f64) {
         if self.q_next > self.q {
-            let delta = self.zn[self.max_order()];
+            let delta = self.zn[self.max_order()].clone();
             raise_order(&mut self.zn, self.q, self.hscale, &self.tau, &delta);
             self.q += 1;
             self.qwait = self.q + 1;
@@ -609,12 +639,12 @@ impl<const N: usize> Bdf<N> {
         Ok(())
     }
 
-    fn eval_rhs<S: OdeSystem<N>>(
+    fn eval_rhs<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         t: f64,
-        y: &SVector<f64, N>,
-    ) -> SVector<f64, N> {
+        y: &OVector<f64, D>,
+    ) -> OVector<f64, D> {
         self.stats.rhs_evals += 1;
         sys.rhs(t, y)
     }
@@ -625,14 +655,14 @@ impl<const N: usize> Bdf<N> {
     }
 
     /// Weighted root-mean-square norm with the current error weights.
-    fn wrms(&self, v: &SVector<f64, N>) -> f64 {
+    fn wrms(&self, v: &OVector<f64, D>) -> f64 {
         self.wrms_squared(v).sqrt()
     }
 
     /// The square of [`wrms`](Self::wrms).
-    fn wrms_squared(&self, v: &SVector<f64, N>) -> f64 {
+    fn wrms_squared(&self, v: &OVector<f64, D>) -> f64 {
         let s: f64 = v.iter().zip(self.ewt.iter()).map(|(a, w)| (a * w) * (a * w)).sum();
-        s / N as f64
+        s / v.len() as f64
     }
 }
 
@@ -642,11 +672,11 @@ mod tests {
     use super::nordsieck::pascal;
     use super::*;
     use crate::solver::FixedStep;
-    use nalgebra::{Matrix2, Vector1, Vector2};
+    use nalgebra::{Matrix2, Vector1, Vector2, U1, U2};
 
     /// y' = −y, y(0) = 1.
     struct Decay;
-    impl OdeSystem<1> for Decay {
+    impl OdeSystem<U1> for Decay {
         fn rhs(&self, _t: f64, y: &Vector1<f64>) -> Vector1<f64> {
             -y
         }
@@ -654,7 +684,7 @@ mod tests {
 
     /// Harmonic oscillator x'' = −ω²x as a first-order system, with its analytic Jacobian.
     struct Oscillator(f64);
-    impl OdeSystem<2> for Oscillator {
+    impl OdeSystem<U2> for Oscillator {
         fn rhs(&self, _t: f64, y: &Vector2<f64>) -> Vector2<f64> {
             Vector2::new(y[1], -self.0 * self.0 * y[0])
         }
@@ -689,9 +719,9 @@ mod tests {
                 }
             }
             let mut fast = zn;
-            pascal::<2, false>(&mut fast, q);
+            pascal::<U2, false>(&mut fast, q);
             assert_eq!(fast, naive, "q = {q}");
-            pascal::<2, true>(&mut fast, q);
+            pascal::<U2, true>(&mut fast, q);
             for (a, b) in fast.iter().zip(&zn) {
                 assert!((a - b).norm() <= 1e-14, "q = {q}: {a} vs {b}");
             }
@@ -758,7 +788,7 @@ mod tests {
 
     /// y' = −y + c: a forcing that the caller changes between steps.
     struct Forced(f64);
-    impl OdeSystem<1> for Forced {
+    impl OdeSystem<U1> for Forced {
         fn rhs(&self, _t: f64, y: &Vector1<f64>) -> Vector1<f64> {
             Vector1::new(self.0 - y[0])
         }

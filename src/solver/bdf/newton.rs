@@ -3,10 +3,13 @@
 
 use super::*;
 
-impl<const N: usize> Bdf<N> {
+impl<D: Dim> Bdf<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     /// Solves the corrector equation γ·f(t_n, y_n) = z_1/l_1 + Δ for the correction
     /// Δ = y_n − y_n(predicted) by modified Newton on I − γJ, reusing J and the LU.
-    pub(super) fn newton<S: OdeSystem<N>>(
+    pub(super) fn newton<S: OdeSystem<D>>(
         &mut self,
         sys: &S,
         mut conv_fail: ConvFail,
@@ -38,12 +41,12 @@ impl<const N: usize> Bdf<N> {
         }
     }
 
-    pub(super) fn newton_iterate<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
+    pub(super) fn newton_iterate<S: OdeSystem<D>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
         let lu = self.lu.as_ref().ok_or(NewtonFail::Singular)?;
         // A stale γ in the LU is corrected by scaling the update (CVODE cvLsSolve for BDF).
         let NewtonScalars { scale, inv_l1, tol, .. } = self.derived;
-        let mut acor = SVector::<f64, N>::zeros();
-        let mut y = self.zn[0];
+        let mut acor = OVector::<f64, D>::zeros_generic(self.zn[0].shape_generic().0, U1);
+        let mut y = self.zn[0].clone();
         let mut del2_prev = 0.0;
         for m in 0..NEWTON_MAX_ITERS {
             let f = sys.rhs(self.t, &y);
@@ -52,10 +55,10 @@ impl<const N: usize> Bdf<N> {
             // A non-finite f needs no test of its own: ±∞ or NaN in f gives ±∞ or NaN in the
             // residual, the solve carries it into Δ (no product or sum makes it finite again),
             // and the test of ‖Δ‖ below fails in this same iteration.
-            let residual = f * self.gamma - (self.zn[1] * inv_l1 + acor);
+            let residual = f * self.gamma - (&self.zn[1] * inv_l1 + &acor);
             let delta = lu.solve(&residual) * scale;
-            acor += delta;
-            y = self.zn[0] + acor;
+            acor += &delta;
+            y = &self.zn[0] + &acor;
             // The tests on squares: no square root on the iteration's chain (the one root
             // left, of the ratio, is taken from the second iteration on).
             let del2 = self.wrms_squared(&delta);
@@ -81,8 +84,9 @@ impl<const N: usize> Bdf<N> {
     /// J at the predicted state: analytic if the system has one, else forward differences
     /// with CVODE's increment rule (cvLsDenseDQJac): σ_j = max(√ε·|y_j|, m_inc/w_j) with
     /// m_inc = 1000·|h|·ε·N·‖f‖_wrms.
-    pub(super) fn evaluate_jacobian<S: OdeSystem<N>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
-        let y = self.zn[0];
+    pub(super) fn evaluate_jacobian<S: OdeSystem<D>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
+        let y = self.zn[0].clone();
+        let n = y.len();
         self.stats.jac_evals += 1;
         self.steps_at_jac = self.stats.steps;
         let jac = match sys.jacobian(self.t, &y) {
@@ -95,19 +99,21 @@ impl<const N: usize> Bdf<N> {
                 }
                 let fnorm = self.wrms(&f0);
                 let min_inc = if fnorm > 0.0 {
-                    FD_MIN_INC_MULT * self.h.abs() * f64::EPSILON * N as f64 * fnorm
+                    FD_MIN_INC_MULT * self.h.abs() * f64::EPSILON * n as f64 * fnorm
                 } else {
                     1.0
                 };
                 let sqrt_eps = f64::EPSILON.sqrt();
-                let mut jac = SMatrix::<f64, N, N>::zeros();
-                for j in 0..N {
+                let d = y.shape_generic().0;
+                let mut jac = OMatrix::<f64, D, D>::zeros_generic(d, d);
+                let mut yj = y.clone();
+                for j in 0..n {
                     let inc = (sqrt_eps * y[j].abs()).max(min_inc / self.ewt[j]);
-                    let mut yj = y;
-                    yj[j] += inc;
+                    yj[j] = y[j] + inc;
                     let fj = sys.rhs(self.t, &yj);
+                    yj[j] = y[j];
                     self.stats.rhs_evals_jac += 1;
-                    jac.set_column(j, &((fj - f0) / inc));
+                    jac.set_column(j, &((fj - &f0) / inc));
                 }
                 jac
             }
@@ -128,7 +134,8 @@ impl<const N: usize> Bdf<N> {
 
     /// LU of I − γJ with the current γ.
     pub(super) fn factor(&mut self) -> Result<(), NewtonFail> {
-        let m = SMatrix::<f64, N, N>::identity() - self.jac * self.gamma;
+        let d = self.jac.shape_generic().0;
+        let m = OMatrix::<f64, D, D>::identity_generic(d, d) - &self.jac * self.gamma;
         self.lu = Lu::factor(&m);
         self.stats.lu_factorizations += 1;
         self.steps_at_lu = self.stats.steps;

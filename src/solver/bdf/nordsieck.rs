@@ -5,24 +5,25 @@ use super::*;
 
 /// The prediction z ← P·z by the Pascal triangle (CVODE cvPredict), or with `UNDO` its
 /// inverse (cvRestore), for order q. This runs at every step attempt. The additions are
-/// written out for each order, on a local copy of the columns, so that the columns stay in
-/// registers: a load and a store per element instead of two loads and a store per addition
-/// (loops over j kept them in memory; docs/decisions.md, "The prediction written out").
-/// They are those of the triangle, in its order.
-pub(super) fn pascal<const N: usize, const UNDO: bool>(zn: &mut [SVector<f64, N>; NCOL], q: usize) {
-    /// z_{j−1} ± z_j for each j listed, in the order listed, on a local copy of the columns.
+/// written out for each order, each on two columns split apart (`split_at_mut`), so that
+/// the compiler sees them disjoint and, for a fixed dimension, keeps the columns in
+/// registers (loops over j kept them in memory; docs/decisions.md, "The prediction written
+/// out"). They are those of the triangle, in its order.
+pub(super) fn pascal<D: Dim, const UNDO: bool>(zn: &mut [OVector<f64, D>; NCOL], q: usize)
+where
+    DefaultAllocator: Allocator<D>,
+{
+    /// z_{j−1} ± z_j for each j listed, in the order listed.
     macro_rules! triangle {
         ($q:literal: $($j:literal)*) => {{
-            let mut z = *zn;
             $(
-                let zj = z[$j];
+                let (lo, hi) = zn.split_at_mut($j);
                 if UNDO {
-                    z[$j - 1] -= zj;
+                    lo[$j - 1] -= &hi[0];
                 } else {
-                    z[$j - 1] += zj;
+                    lo[$j - 1] += &hi[0];
                 }
             )*
-            zn[..$q].copy_from_slice(&z[..$q]);
         }};
     }
     // The sweeps k = 1..=q, each j = q down to k.
@@ -35,20 +36,23 @@ pub(super) fn pascal<const N: usize, const UNDO: bool>(zn: &mut [SVector<f64, N>
     }
 }
 
-impl<const N: usize> Bdf<N> {
+impl<D: Dim> Bdf<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     /// Advances t and predicts the Nordsieck array by the Pascal triangle.
     pub(super) fn predict(&mut self) {
         self.t = match self.landing {
             Some(tstop) => tstop,
             None => self.t + self.h,
         };
-        pascal::<N, false>(&mut self.zn, self.q);
+        pascal::<D, false>(&mut self.zn, self.q);
     }
 
     /// Undoes [`predict`](Self::predict) after a rejected step.
     pub(super) fn restore(&mut self, t_prior: f64) {
         self.t = t_prior;
-        pascal::<N, true>(&mut self.zn, self.q);
+        pascal::<D, true>(&mut self.zn, self.q);
     }
 
     /// Multiplies the step by `eta`: z_j ← η^j z_j.
@@ -103,11 +107,13 @@ impl<const N: usize> Bdf<N> {
                 tau[i] = tau[i - 1];
             }
         }
-        fn correct<const N: usize, const Q: usize>(
-            zn: &mut [SVector<f64, N>; NCOL],
-            acor: &SVector<f64, N>,
+        fn correct<D: Dim, const Q: usize>(
+            zn: &mut [OVector<f64, D>; NCOL],
+            acor: &OVector<f64, D>,
             l: &[f64; NCOL],
-        ) {
+        ) where
+            DefaultAllocator: Allocator<D>,
+        {
             for j in 0..=Q {
                 zn[j] += acor * l[j];
             }
@@ -117,13 +123,13 @@ impl<const N: usize> Bdf<N> {
             self.tau[2] = self.tau[1];
         }
         self.tau[1] = self.h;
-        by_order!(self.q, Q => correct::<N, Q>(&mut self.zn, &self.acor, &self.coeffs.l));
+        by_order!(self.q, Q => correct::<D, Q>(&mut self.zn, &self.acor, &self.coeffs.l));
         self.qwait = self.qwait.saturating_sub(1);
         let qmax = self.max_order();
         let fixed_raising = self.cfg.fixed_step.is_some() && self.q < qmax;
         if (self.qwait == 1 || fixed_raising) && self.q != qmax {
             // Keep this correction: the error estimate at order q+1 and the raise need it.
-            self.zn[qmax] = self.acor;
+            self.zn[qmax].copy_from(&self.acor);
             self.saved_tq5 = self.coeffs.tq[5];
         }
         self.update_weights();

@@ -3,7 +3,10 @@
 
 use super::*;
 
-impl<const N: usize> Bdf<N> {
+impl<D: Dim> Bdf<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     /// Visits every field that changes during integration, in one fixed order: a writer
     /// reads them, a reader overwrites them (FMI's `fmi2SerializeFMUstate` and
     /// `fmi2DeSerializeFMUstate`). Writing a state and reading it into any `Bdf<N>` built
@@ -53,7 +56,7 @@ impl<const N: usize> Bdf<N> {
         v.flag("jac_valid", &mut self.jac_valid);
         let mut has_lu = self.lu.is_some();
         v.flag("lu", &mut has_lu);
-        let mut lu = self.lu.clone().unwrap_or_else(Lu::placeholder);
+        let mut lu = self.lu.clone().unwrap_or_else(|| Lu::placeholder(self.jac.shape_generic().0));
         lu.visit(v);
         if !has_lu {
             v.discarded("lu", lu.is_placeholder());
