@@ -3,7 +3,10 @@
 //! `shared/model-notes.md` (paper eq. 8–13). No I/O, no `unsafe`.
 #![forbid(unsafe_code)]
 
+mod band;
 mod dynamics;
+mod dynamics_n;
+mod elements;
 mod formulation;
 mod kinematics;
 mod params;
@@ -12,6 +15,8 @@ mod signal;
 mod systems;
 
 pub use dynamics::{BeamBody, Modes, Reactions};
+pub use dynamics_n::{BeamBodyN, MAX_ELEMENTS};
+pub use elements::Elements;
 pub use formulation::{Formulation, RangeCheck};
 pub use kinematics::{pq, u1, u1_accel_bias};
 pub use params::{ParamError, Params};

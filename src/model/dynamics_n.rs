@@ -1,0 +1,298 @@
+//! The equations of motion of the beam in n elements with the body at its tip: the paper's
+//! model (`dynamics.rs`) with the beam of [`Elements`] in place of its one element, and
+//! Rayleigh damping of the beam.
+//!
+//! Coordinates q (2n, [`Elements`]); the tip's deflection v1 = q_t and slope ϑ1 = q_{t+1}
+//! (t = 2n − 2); its axial displacement u1 = −½qᵀGq. The body's centre of mass is
+//! C = (l + u_h + r cos θ, v1 + r sin θ), θ = ϑ1 + φ. From T = ½q̇ᵀM_b q̇ + ½M2|Ċ|² + ½J_C θ̇²,
+//! Π = ½qᵀKq − M2 g (u_h + r cos θ) and the dissipation ½q̇ᵀD q̇, D = αM_b + βK, Lagrange's
+//! equations with u_h = u1(q) read (as in `dynamics.rs`, with A = ∂C/∂q)
+//!
+//!   M_b q̈ + K q + D q̇ + M2 Aᵀ(C̈ − g e_x) + J_C θ̈ e_ϑ = 0,
+//!
+//! A's rows: A_x = −(Gq + r sin θ e_ϑ), A_y = e_v + r cos θ e_ϑ (e_v, e_ϑ: the tip's unit
+//! vectors), and C̈ = A q̈ + a with a = (−q̇ᵀGq̇ − r cos θ θ̇² − r sin θ φ″, −r sin θ θ̇² +
+//! r cos θ φ″). The mass matrix M_b + M2 AᵀA + J_C e_ϑe_ϑᵀ is the banded B = M_b +
+//! M2 A_yA_yᵀ + J_C e_ϑe_ϑᵀ (A_y lives on the tip's two coordinates) plus the rank-one
+//! M2 a_x a_xᵀ, a_x = Gq + r sin θ e_ϑ: q̈ by a band Cholesky of B and the Sherman–Morrison
+//! formula, O(n).
+//!
+//! The DAE formulations integrate u_h = u2 with the constraint u2 = u1(q) differentiated
+//! twice; eliminating ü2 by the constraint's row leaves exactly the equations above (the
+//! paper's §3 remark; `dynamics.rs` solves its 3×3 system by the same elimination), so their
+//! q̈ is the reduced one and ü2 = −(Gq)ᵀq̈ − q̇ᵀGq̇. The linear formulation is the first-order
+//! Taylor expansion about q = q̇ = q̈ = 0 with φ kept exact, as eq. (16).
+
+use super::band::Band;
+use super::dynamics::BeamBody;
+use super::elements::Elements;
+use super::params::{ParamError, Params};
+use super::phi::Phi;
+use crate::math;
+use crate::range::Range;
+
+/// The most elements: the beam's highest frequency grows as n², and 32 elements resolve the
+/// first modes far beyond the model's other approximations.
+pub const MAX_ELEMENTS: usize = 32;
+
+/// The model with n elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BeamBodyN {
+    pub params: Params,
+    pub beam: Elements,
+    /// D = αM_b + βK; `None` without damping.
+    damping: Option<Band>,
+    /// The paper's model with the same parameters, for what depends on the tip only (the
+    /// hinge reactions).
+    pub tip: BeamBody,
+}
+
+impl BeamBodyN {
+    /// The model of `params` with `n` elements (1..=32) and Rayleigh damping α [1/s], β [s]
+    /// (each ≥ 0).
+    pub fn new(params: Params, n: usize, alpha: f64, beta: f64) -> Result<Self, ParamError> {
+        let tip = BeamBody::new(params)?;
+        let range = Range::Integers(1, MAX_ELEMENTS as i64);
+        if !(1..=MAX_ELEMENTS).contains(&n) {
+            return Err(ParamError { name: "n_elements", value: n as f64, allowed: range });
+        }
+        super::params::check("damping_alpha", alpha, Range::NonNegative)?;
+        super::params::check("damping_beta", beta, Range::NonNegative)?;
+        let beam = Elements::new(n, params.l, params.ei, params.m);
+        let damping = (alpha != 0.0 || beta != 0.0).then(|| {
+            Band::zeros(beam.dofs())
+                .plus_scaled(alpha, &beam.mass)
+                .plus_scaled(beta, &beam.stiffness)
+        });
+        Ok(Self { params, beam, damping, tip })
+    }
+
+    /// The number of coordinates, 2n.
+    pub fn dofs(&self) -> usize {
+        self.beam.dofs()
+    }
+
+    /// Gq and q̇ᵀGq̇.
+    fn shortening(&self, q: &[f64], qd: &[f64]) -> (Vec<f64>, f64) {
+        (self.beam.g.mul(q), self.beam.g.form(qd, qd))
+    }
+
+    /// The tip's axial displacement u1 = −½qᵀGq and its rate −(Gq)ᵀq̇.
+    pub fn u1(&self, q: &[f64], qd: &[f64]) -> (f64, f64) {
+        let gq = self.beam.g.mul(q);
+        let dot: f64 = gq.iter().zip(qd).map(|(a, b)| a * b).sum();
+        let u = gq.iter().zip(q).map(|(a, b)| a * b).sum::<f64>();
+        (-0.5 * u, -dot)
+    }
+
+    /// −K q − D q̇.
+    fn elastic(&self, q: &[f64], qd: &[f64]) -> Vec<f64> {
+        let mut f = self.beam.stiffness.mul(q);
+        if let Some(d) = &self.damping {
+            let dq = d.mul(qd);
+            f.iter_mut().zip(dq).for_each(|(f, d)| *f += d);
+        }
+        f.iter_mut().for_each(|f| *f = -*f);
+        f
+    }
+
+    /// The reduced equations' accelerations q̈ into `out`, and the tip's axial acceleration
+    /// ü1. NaN if the mass matrix is not positive definite.
+    pub fn reduced(&self, phi: &Phi, q: &[f64], qd: &[f64], out: &mut [f64]) -> f64 {
+        let Params { m2, j_c, r, g: grav, .. } = self.params;
+        let t = self.beam.tip();
+        let (s, c) = math::sin_cos(q[t + 1] + phi.phi);
+        let dth = qd[t + 1] + phi.dphi;
+        let (gq, w) = self.shortening(q, qd);
+        let ax = -w - r * c * dth * dth - r * s * phi.ddphi - grav;
+        let ay = -r * s * dth * dth + r * c * phi.ddphi;
+        // B = M_b + M2 A_yA_yᵀ + J_C e_ϑe_ϑᵀ on the tip's block.
+        let mut b = self.beam.mass.clone();
+        b.add(t, t, m2);
+        b.add(t + 1, t, m2 * r * c);
+        b.add(t + 1, t + 1, m2 * r * r * c * c + j_c);
+        // F = −Kq − Dq̇ − M2 (A_x a_x + A_y a_y) − J_C φ″ e_ϑ, with A_x = −a_vec.
+        let mut a_vec = gq.clone();
+        a_vec[t + 1] += r * s;
+        let mut f = self.elastic(q, qd);
+        for (f, a) in f.iter_mut().zip(&a_vec) {
+            *f += m2 * a * ax;
+        }
+        f[t] -= m2 * ay;
+        f[t + 1] -= m2 * r * c * ay + j_c * phi.ddphi;
+        let Some(chol) = b.cholesky() else {
+            out.fill(f64::NAN);
+            return f64::NAN;
+        };
+        chol.solve_in_place(&mut f);
+        let mut z = a_vec.clone();
+        chol.solve_in_place(&mut z);
+        // (B + M2 a aᵀ)⁻¹F = x − z (M2 aᵀx) / (1 + M2 aᵀz)
+        let dot = |u: &[f64], v: &[f64]| u.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+        let k = m2 * dot(&a_vec, &f) / (1.0 + m2 * dot(&a_vec, &z));
+        for ((o, x), z) in out.iter_mut().zip(&f).zip(&z) {
+            *o = x - z * k;
+        }
+        -dot(&gq, out) - w
+    }
+
+    /// The linear equations' accelerations (eq. 16 generalised) into `out`. NaN if the mass
+    /// matrix is not positive definite.
+    pub fn linear(&self, phi: &Phi, q: &[f64], qd: &[f64], out: &mut [f64]) {
+        let Params { m2, j_c, r, g: grav, .. } = self.params;
+        let t = self.beam.tip();
+        let (s0, c0) = math::sin_cos(phi.phi);
+        let (w, ddphi) = (phi.dphi, phi.ddphi);
+        let (th, dth) = (q[t + 1], qd[t + 1]);
+        // (C̈ − g e_x) at rest and its first-order change through θ and θ̇.
+        let (a0x, a0y) =
+            (-r * c0 * w * w - r * s0 * ddphi - grav, -r * s0 * w * w + r * c0 * ddphi);
+        let dax = r * s0 * w * w * th - 2.0 * r * c0 * w * dth - r * c0 * ddphi * th;
+        let day = -r * c0 * w * w * th - 2.0 * r * s0 * w * dth - r * s0 * ddphi * th;
+        let mut b = self.beam.mass.clone();
+        b.add(t, t, m2);
+        b.add(t + 1, t, m2 * r * c0);
+        b.add(t + 1, t + 1, m2 * r * r + j_c);
+        // −M2 [A0ᵀ(a0 + da) + dAᵀ a0], A0_x = −r s0 e_ϑ, A0_y = e_v + r c0 e_ϑ,
+        // dA_x = −Gq − r c0 ϑ e_ϑ, dA_y = −r s0 ϑ e_ϑ.
+        let gq = self.beam.g.mul(q);
+        let mut f = self.elastic(q, qd);
+        for (f, g) in f.iter_mut().zip(&gq) {
+            *f += m2 * g * a0x;
+        }
+        f[t] -= m2 * (a0y + day);
+        f[t + 1] -= m2
+            * (-r * s0 * (a0x + dax) + r * c0 * (a0y + day)
+                - r * c0 * th * a0x
+                - r * s0 * th * a0y)
+            + j_c * ddphi;
+        match b.cholesky() {
+            Some(chol) => {
+                chol.solve_in_place(&mut f);
+                out.copy_from_slice(&f);
+            }
+            None => out.fill(f64::NAN),
+        }
+    }
+
+    /// The beam's kinetic and strain energies, ½q̇ᵀM_b q̇ and ½qᵀKq [J].
+    pub fn beam_energy(&self, q: &[f64], qd: &[f64]) -> (f64, f64) {
+        (0.5 * self.beam.mass.form(qd, qd), 0.5 * self.beam.stiffness.form(q, q))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector2;
+
+    fn phi() -> Phi {
+        Phi { phi: 1.1, dphi: -2.3, ddphi: 7.0 }
+    }
+
+    /// With one element the equations are the paper's (`dynamics.rs`), to round-off.
+    #[test]
+    fn one_element_is_the_paper_s_model() {
+        let params = Params::default();
+        let n1 = BeamBodyN::new(params, 1, 0.0, 0.0).unwrap();
+        let paper = BeamBody::new(params).unwrap();
+        let (q, qd) = ([0.21, -0.13], [0.7, 1.9]);
+        for linear in [false, true] {
+            let mut acc = [0.0; 2];
+            if linear {
+                n1.linear(&phi(), &q, &qd, &mut acc);
+            } else {
+                n1.reduced(&phi(), &q, &qd, &mut acc);
+            }
+            let want = paper.two_dof_accel(linear, &phi(), Vector2::from(q), Vector2::from(qd));
+            for k in 0..2 {
+                assert!((acc[k] - want[k]).abs() <= 1e-12 * want.norm(), "{linear} {acc:?} {want}");
+            }
+        }
+    }
+
+    /// The accelerations satisfy Lagrange's equations of the energies: the residual
+    /// d/dt ∂L/∂q̇ − ∂L/∂q + Dq̇, with the derivatives of L = T − Π taken by central
+    /// differences of the energy functions along the motion, vanishes.
+    #[test]
+    fn accelerations_satisfy_lagrange_s_equations_of_the_energies() {
+        let params = Params::default();
+        let (alpha, beta) = (0.3, 2e-3);
+        let model = BeamBodyN::new(params, 4, alpha, beta).unwrap();
+        let n = model.dofs();
+        // A smooth deflection and rate (cubics in x, which the elements represent exactly):
+        // the accelerations stay of the order of the slow modes', whose third time
+        // derivatives the differences in time below can take.
+        let nodal = |a: f64, b: f64| -> Vec<f64> {
+            let l = params.l;
+            (1..=n / 2)
+                .flat_map(|k| {
+                    let x = model.beam.l * k as f64 / (n / 2) as f64 / l;
+                    [a * x * x + b * x * x * x, (2.0 * a * x + 3.0 * b * x * x) / l]
+                })
+                .collect()
+        };
+        let (q, qd) = (nodal(0.05, 0.02), nodal(0.4, -0.1));
+        let ph = phi();
+        let mut qdd = vec![0.0; n];
+        model.reduced(&ph, &q, &qd, &mut qdd);
+        let Params { m2, j_c, r, g, .. } = params;
+        let lagrangian = |q: &[f64], qd: &[f64], phi: &Phi| {
+            let (t1, p1) = model.beam_energy(q, qd);
+            let (u, du) = model.u1(q, qd);
+            let t = model.beam.tip();
+            let th = q[t + 1] + phi.phi;
+            let dth = qd[t + 1] + phi.dphi;
+            let (s, c) = math::sin_cos(th);
+            let vc = (du - r * s * dth, qd[t] + r * c * dth);
+            let t2 = 0.5 * m2 * (vc.0 * vc.0 + vc.1 * vc.1) + 0.5 * j_c * dth * dth;
+            let p2 = -m2 * g * (u + r * c);
+            t1 + t2 - p1 - p2
+        };
+        // The state along the motion at time τ (second order in τ).
+        let at = |tau: f64| {
+            let qs: Vec<f64> =
+                (0..n).map(|k| q[k] + qd[k] * tau + 0.5 * qdd[k] * tau * tau).collect();
+            let qds: Vec<f64> = (0..n).map(|k| qd[k] + qdd[k] * tau).collect();
+            let ps = Phi {
+                phi: ph.phi + ph.dphi * tau + 0.5 * ph.ddphi * tau * tau,
+                dphi: ph.dphi + ph.ddphi * tau,
+                ddphi: ph.ddphi,
+            };
+            (qs, qds, ps)
+        };
+        let d = model.damping.as_ref().map_or(vec![0.0; n], |d| d.mul(&qd));
+        let (eps, tau) = (1e-6, 1e-4);
+        for i in 0..n {
+            let dl_dqd = |tau: f64| {
+                let (qs, mut qds, ps) = at(tau);
+                qds[i] += eps;
+                let plus = lagrangian(&qs, &qds, &ps);
+                qds[i] -= 2.0 * eps;
+                (plus - lagrangian(&qs, &qds, &ps)) / (2.0 * eps)
+            };
+            let ddt = (dl_dqd(tau) - dl_dqd(-tau)) / (2.0 * tau);
+            let (mut qs, qds, ps) = at(0.0);
+            qs[i] += eps;
+            let plus = lagrangian(&qs, &qds, &ps);
+            qs[i] -= 2.0 * eps;
+            let dl_dq = (plus - lagrangian(&qs, &qds, &ps)) / (2.0 * eps);
+            let residual = ddt - dl_dq + d[i];
+            let scale = model.beam.stiffness.mul(&q)[i].abs() + m2 * g;
+            assert!(residual.abs() < 1e-6 * scale, "row {i}: residual {residual}");
+        }
+    }
+
+    #[test]
+    fn out_of_range_counts_and_damping_are_refused_naming_the_setting() {
+        let p = Params::default();
+        for n in [0, 33] {
+            let e = BeamBodyN::new(p, n, 0.0, 0.0).unwrap_err();
+            assert!(e.to_string().contains("n_elements") && e.to_string().contains("32"), "{e}");
+        }
+        let e = BeamBodyN::new(p, 2, -1.0, 0.0).unwrap_err();
+        assert!(e.to_string().contains("damping_alpha"), "{e}");
+        let e = BeamBodyN::new(p, 2, 0.0, -1e-3).unwrap_err();
+        assert!(e.to_string().contains("damping_beta"), "{e}");
+    }
+}
