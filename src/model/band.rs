@@ -171,8 +171,8 @@ mod tests {
     fn product_form_and_solve_match_dense_algebra() {
         for (n, seed) in [(1, 1), (2, 2), (4, 3), (7, 4), (64, 5)] {
             let (a, dense) = random(n, seed);
-            let x: Vec<f64> = (0..n).map(|i| 0.3 + (i as f64).sin()).collect();
-            let y: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
+            let x: Vec<f64> = (0..n).map(|i| 0.3 + crate::math::sin(i as f64)).collect();
+            let y: Vec<f64> = (0..n).map(|i| crate::math::cos(i as f64 * 0.7)).collect();
             let (xv, yv) = (DVector::from_vec(x.clone()), DVector::from_vec(y.clone()));
             let ax = &dense * &xv;
             let ours = a.mul(&x);
