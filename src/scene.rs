@@ -7,7 +7,7 @@
 #![forbid(unsafe_code)]
 
 use crate::model::{BeamBody, Formulation, Interpolation, PaperLaw, Params, RangeCheck};
-use crate::settings::{Key, Setting, Value, SETTINGS};
+use crate::settings::{Key, Kind, Setting, Value, SETTINGS};
 use crate::solver::{BdfConfig, FixedStep};
 
 /// Initial state of the beam [m, rad, m/s, rad/s]. The DAE's u2, u̇2 start consistent.
@@ -147,6 +147,9 @@ impl Scene {
             Key::JC => Real(p.j_c),
             Key::R => Real(p.r),
             Key::G => Real(p.g),
+            Key::NElements => Integer(p.n_elements as i64),
+            Key::DampingAlpha => Real(p.damping_alpha),
+            Key::DampingBeta => Real(p.damping_beta),
             Key::TRot => Real(self.law.t_rot),
             Key::PhiEnd => Real(self.law.phi_end),
             Key::Phi0 => Real(self.law.phi0),
@@ -188,10 +191,20 @@ impl Scene {
         self.set(setting.key, value)
     }
 
-    /// Sets the real setting called `name` to `value` (a study's parameter).
+    /// Sets the setting called `name` to the number `value` (a study's parameter): a real,
+    /// or an integer given as a whole number.
     pub fn set_number(&mut self, name: &str, value: f64) -> Result<(), String> {
         let setting = Setting::by_name(name)?;
-        self.set(setting.key, Value::Real(value))
+        let value = match setting.kind {
+            Kind::Integer if value.fract() == 0.0 && value.abs() <= (1u64 << 53) as f64 => {
+                Value::Integer(value as i64)
+            }
+            Kind::Integer => {
+                return Err(format!("`{}` = {value:?}: must be {}", name, setting.expects()))
+            }
+            _ => Value::Real(value),
+        };
+        self.set(setting.key, value)
     }
 
     /// Stores a checked value.
@@ -218,6 +231,9 @@ impl Scene {
             Key::JC => p.j_c = real(value),
             Key::R => p.r = real(value),
             Key::G => p.g = real(value),
+            Key::NElements => p.n_elements = int(value) as usize,
+            Key::DampingAlpha => p.damping_alpha = real(value),
+            Key::DampingBeta => p.damping_beta = real(value),
             Key::TRot => self.law.t_rot = real(value),
             Key::PhiEnd => self.law.phi_end = real(value),
             Key::Phi0 => self.law.phi0 = real(value),

@@ -118,6 +118,9 @@ pub enum Key {
     JC,
     R,
     G,
+    NElements,
+    DampingAlpha,
+    DampingBeta,
     TRot,
     PhiEnd,
     Phi0,
@@ -322,7 +325,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 30] = [
+pub const SETTINGS: [Setting; 33] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -344,6 +347,34 @@ pub const SETTINGS: [Setting; 30] = [
         Finite,
         Real(10.0),
         "Gravity along the undeformed beam axis (> 0 stretches the beam)",
+        PHYSICAL,
+    ),
+    row(
+        K::NElements,
+        "n_elements",
+        Kind::Integer,
+        Integers(1, crate::model::MAX_ELEMENTS as i64),
+        Integer(1),
+        "Cubic Hermite elements of the beam: 1 is the paper's model (2 coordinates), n has 2n",
+        Appears { fmu: true, study: true, flag: Some("--elements") },
+    ),
+    row(
+        K::DampingAlpha,
+        "damping_alpha",
+        real("1/s"),
+        NonNegative,
+        Real(0.0),
+        "Rayleigh damping of the beam: alpha times its mass matrix (0: none, as in the paper)",
+        PHYSICAL,
+    ),
+    row(
+        K::DampingBeta,
+        "damping_beta",
+        real("s"),
+        NonNegative,
+        Real(0.0),
+        "Rayleigh damping of the beam: beta times its stiffness matrix (0: none, as in the \
+         paper)",
         PHYSICAL,
     ),
     row(

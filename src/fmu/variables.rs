@@ -57,6 +57,7 @@ pub const UNITS: &[Unit] = &[
     unit("m", 0, 1, 0, 0),
     unit("rad", 0, 0, 0, 1),
     unit("s", 0, 0, 1, 0),
+    unit("1/s", 0, 0, -1, 0),
     unit("kg", 1, 0, 0, 0),
     unit("kg/m", 1, -1, 0, 0),
     unit("kg.m2", 1, 2, 0, 0),
@@ -119,6 +120,9 @@ pub enum Var {
     Theta10,
     Dv10,
     Dtheta10,
+    NElements,
+    DampingAlpha,
+    DampingBeta,
 }
 
 impl Var {
@@ -297,6 +301,9 @@ pub const VARIABLES: &[Variable] = &[
     param(Var::Theta10, Key::Theta10),
     param(Var::Dv10, Key::Dv10),
     param(Var::Dtheta10, Key::Dtheta10),
+    param(Var::NElements, Key::NElements),
+    param(Var::DampingAlpha, Key::DampingAlpha),
+    param(Var::DampingBeta, Key::DampingBeta),
 ];
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the

@@ -261,14 +261,28 @@ impl BeamBody {
 
     /// Total mechanical energy T1 + T2 + Π1 + Π2 [J], Π2 = −M2 g (u_h + r cos θ).
     pub fn energy(&self, phi: &Phi, q: Vector2<f64>, qd: Vector2<f64>, u_h: f64, du_h: f64) -> f64 {
-        let Params { m2, j_c, r, g, .. } = self.params;
-        let (s, c, dth) = body_angle(phi, q[1], qd[1]);
         let t1 = 0.5 * qd.dot(&(self.mb * qd));
         let p1 = 0.5 * q.dot(&(self.k * q));
+        let (t2, p2) = self.body_energies(phi, q, qd, u_h, du_h);
+        t1 + t2 + p1 + p2
+    }
+
+    /// The body's kinetic and potential energies T2 and Π2 [J] for the tip's (v1, ϑ1) = `q`,
+    /// their rates `qd`, and the hinge's axial displacement and rate.
+    pub fn body_energies(
+        &self,
+        phi: &Phi,
+        q: Vector2<f64>,
+        qd: Vector2<f64>,
+        u_h: f64,
+        du_h: f64,
+    ) -> (f64, f64) {
+        let Params { m2, j_c, r, g, .. } = self.params;
+        let (s, c, dth) = body_angle(phi, q[1], qd[1]);
         let vc = Vector2::new(du_h - r * s * dth, qd[0] + r * c * dth);
         let t2 = 0.5 * m2 * vc.norm_squared() + 0.5 * j_c * dth * dth;
         let p2 = -m2 * g * (u_h + r * c);
-        t1 + t2 + p1 + p2
+        (t2, p2)
     }
 
     /// The buckling value of g < 0 (gravity reversed, compressing the beam along its axis)

@@ -26,10 +26,9 @@
 use super::band::Band;
 use super::dynamics::BeamBody;
 use super::elements::Elements;
-use super::params::{ParamError, Params};
+use super::params::Params;
 use super::phi::Phi;
 use crate::math;
-use crate::range::Range;
 
 /// The most elements: the beam's highest frequency grows as n², and 32 elements resolve the
 /// first modes far beyond the model's other approximations.
@@ -48,16 +47,18 @@ pub struct BeamBodyN {
 }
 
 impl BeamBodyN {
-    /// The model of `params` with `n` elements (1..=32) and Rayleigh damping α [1/s], β [s]
-    /// (each ≥ 0).
-    pub fn new(params: Params, n: usize, alpha: f64, beta: f64) -> Result<Self, ParamError> {
-        let tip = BeamBody::new(params)?;
-        let range = Range::Integers(1, MAX_ELEMENTS as i64);
-        if !(1..=MAX_ELEMENTS).contains(&n) {
-            return Err(ParamError { name: "n_elements", value: n as f64, allowed: range });
+    /// The model of `params`: `params.n_elements` elements (1..=32) and Rayleigh damping
+    /// α [1/s], β [s] (each ≥ 0). A massless beam (m = 0) has one element only: the nodes
+    /// inside it would have no inertia.
+    pub fn new(params: Params) -> Result<Self, String> {
+        let tip = BeamBody::new(params).map_err(|e| e.to_string())?;
+        let Params { n_elements: n, damping_alpha: alpha, damping_beta: beta, .. } = params;
+        if n > 1 && params.m == 0.0 {
+            return Err(format!(
+                "`n_elements` = {n} needs a beam with mass (`m` > 0): the nodes inside a \
+                 massless beam have no inertia; use n_elements = 1 for m = 0"
+            ));
         }
-        super::params::check("damping_alpha", alpha, Range::NonNegative)?;
-        super::params::check("damping_beta", beta, Range::NonNegative)?;
         let beam = Elements::new(n, params.l, params.ei, params.m);
         let damping = (alpha != 0.0 || beta != 0.0).then(|| {
             Band::zeros(beam.dofs())
@@ -194,7 +195,7 @@ mod tests {
     #[test]
     fn one_element_is_the_paper_s_model() {
         let params = Params::default();
-        let n1 = BeamBodyN::new(params, 1, 0.0, 0.0).unwrap();
+        let n1 = BeamBodyN::new(params).unwrap();
         let paper = BeamBody::new(params).unwrap();
         let (q, qd) = ([0.21, -0.13], [0.7, 1.9]);
         for linear in [false, true] {
@@ -216,9 +217,9 @@ mod tests {
     /// differences of the energy functions along the motion, vanishes.
     #[test]
     fn accelerations_satisfy_lagrange_s_equations_of_the_energies() {
-        let params = Params::default();
-        let (alpha, beta) = (0.3, 2e-3);
-        let model = BeamBodyN::new(params, 4, alpha, beta).unwrap();
+        let params =
+            Params { n_elements: 4, damping_alpha: 0.3, damping_beta: 2e-3, ..Params::default() };
+        let model = BeamBodyN::new(params).unwrap();
         let n = model.dofs();
         // A smooth deflection and rate (cubics in x, which the elements represent exactly):
         // the accelerations stay of the order of the slow modes', whose third time
@@ -287,12 +288,14 @@ mod tests {
     fn out_of_range_counts_and_damping_are_refused_naming_the_setting() {
         let p = Params::default();
         for n in [0, 33] {
-            let e = BeamBodyN::new(p, n, 0.0, 0.0).unwrap_err();
-            assert!(e.to_string().contains("n_elements") && e.to_string().contains("32"), "{e}");
+            let e = BeamBodyN::new(Params { n_elements: n, ..p }).unwrap_err();
+            assert!(e.contains("n_elements") && e.contains("32"), "{e}");
         }
-        let e = BeamBodyN::new(p, 2, -1.0, 0.0).unwrap_err();
-        assert!(e.to_string().contains("damping_alpha"), "{e}");
-        let e = BeamBodyN::new(p, 2, 0.0, -1e-3).unwrap_err();
-        assert!(e.to_string().contains("damping_beta"), "{e}");
+        let e = BeamBodyN::new(Params { damping_alpha: -1.0, ..p }).unwrap_err();
+        assert!(e.contains("damping_alpha"), "{e}");
+        let e = BeamBodyN::new(Params { damping_beta: -1e-3, ..p }).unwrap_err();
+        assert!(e.contains("damping_beta"), "{e}");
+        let e = BeamBodyN::new(Params { n_elements: 2, m: 0.0, ..p }).unwrap_err();
+        assert!(e.contains("n_elements") && e.contains("`m`"), "{e}");
     }
 }

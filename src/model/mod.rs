@@ -13,6 +13,7 @@ mod params;
 mod phi;
 mod signal;
 mod systems;
+mod systems_n;
 
 pub use dynamics::{BeamBody, Modes, Reactions};
 pub use dynamics_n::{BeamBodyN, MAX_ELEMENTS};
@@ -23,3 +24,4 @@ pub use params::{ParamError, Params};
 pub use phi::{PaperLaw, Phi, PhiPiece, Poly};
 pub use signal::{HostSignal, Interpolation, Sample, SignalError, HISTORY};
 pub use systems::{DaeSystem, Kinematics, Outputs, TwoDofSystem};
+pub use systems_n::ElementsSystem;

@@ -18,11 +18,27 @@ pub struct Params {
     pub r: f64,
     /// Gravity along +x, the undeformed beam axis, g [m/s²]. Any finite value. Default 10.
     pub g: f64,
+    /// Cubic Hermite elements of the beam, 1..=32. Default 1 (the paper's model).
+    pub n_elements: usize,
+    /// Rayleigh damping of the beam, D = αM_b + βK: α [1/s] and β [s], each ≥ 0. Default 0.
+    pub damping_alpha: f64,
+    pub damping_beta: f64,
 }
 
 impl Default for Params {
     fn default() -> Self {
-        Self { l: 2.5, ei: 1000.0, m: 2.0, m2: 12.0, j_c: 1.0, r: 0.5, g: 10.0 }
+        Self {
+            l: 2.5,
+            ei: 1000.0,
+            m: 2.0,
+            m2: 12.0,
+            j_c: 1.0,
+            r: 0.5,
+            g: 10.0,
+            n_elements: 1,
+            damping_alpha: 0.0,
+            damping_beta: 0.0,
+        }
     }
 }
 
@@ -66,7 +82,17 @@ impl Params {
         check("M2", self.m2, Range::Positive)?;
         check("J_C", self.j_c, Range::NonNegative)?;
         check("r", self.r, Range::NonNegative)?;
-        check("g", self.g, Range::Finite)
+        check("g", self.g, Range::Finite)?;
+        let elements = Range::Integers(1, super::MAX_ELEMENTS as i64);
+        check("n_elements", self.n_elements as f64, elements)?;
+        check("damping_alpha", self.damping_alpha, Range::NonNegative)?;
+        check("damping_beta", self.damping_beta, Range::NonNegative)
+    }
+
+    /// Whether these are the paper's model: one element and no damping, which the
+    /// two-coordinate equations of `dynamics.rs` integrate on the stack.
+    pub fn is_paper_model(&self) -> bool {
+        self.n_elements == 1 && self.damping_alpha == 0.0 && self.damping_beta == 0.0
     }
 }
 

@@ -27,7 +27,7 @@ pub fn check_deflection(l: f64, v1: f64, theta1: f64) -> Result<(), RangeViolati
 }
 
 /// With the range check off: only that the coordinates are numbers.
-fn check_numbers(values: &[(&'static str, f64)]) -> Result<(), RangeViolation> {
+pub(super) fn check_numbers(values: &[(&'static str, f64)]) -> Result<(), RangeViolation> {
     match values.iter().find(|(_, x)| x.is_nan()) {
         Some(&(name, value)) => Err(RangeViolation { name, value, allowed: "a number" }),
         None => Ok(()),
@@ -72,6 +72,9 @@ pub struct Kinematics {
     pub phi: Phi,
     /// Constraint residual u2 − u1(v1, ϑ1) [m]: identically 0 where u2 is computed from (21).
     pub drift: f64,
+    /// The beam's kinetic and strain energy [J] of a beam in n elements; `None` for the
+    /// paper's, whose energy follows from (v1, ϑ1) and their rates.
+    pub beam_energy: Option<f64>,
 }
 
 impl Kinematics {
@@ -83,7 +86,13 @@ impl Kinematics {
     /// The total mechanical energy [J].
     pub fn energy(&self, model: &BeamBody) -> f64 {
         let (q, qd) = (Vector2::new(self.v1, self.theta1), Vector2::new(self.dv1, self.dtheta1));
-        model.energy(&self.phi, q, qd, self.u2, self.du2)
+        match self.beam_energy {
+            Some(beam) => {
+                let (t2, p2) = model.body_energies(&self.phi, q, qd, self.u2, self.du2);
+                beam + (t2 + p2)
+            }
+            None => model.energy(&self.phi, q, qd, self.u2, self.du2),
+        }
     }
 
     /// Everything, the reactions and the energy included.
@@ -203,6 +212,7 @@ impl TwoDofSystem<'_> {
             ddu2: -p * acc[0] - l * qq * acc[1] - u1_accel_bias(l, qd[0], qd[1]),
             phi,
             drift: 0.0,
+            beam_energy: None,
         }
     }
 
@@ -272,6 +282,7 @@ impl DaeSystem<'_> {
             ddu2: acc[2],
             phi,
             drift: x[2] - u1(self.model.params.l, x[0], x[1]),
+            beam_energy: None,
         }
     }
 

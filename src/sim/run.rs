@@ -6,14 +6,14 @@
 use super::SimError;
 use crate::math;
 use crate::model::{
-    BeamBody, DaeSystem, Formulation, HostSignal, Kinematics, Outputs, PaperLaw, Phi, PhiPiece,
-    Poly, RangeCheck, Sample, TwoDofSystem,
+    BeamBody, BeamBodyN, DaeSystem, ElementsSystem, Formulation, HostSignal, Kinematics, Outputs,
+    PaperLaw, Phi, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem,
 };
 use crate::scene::{InitialState, PhiSource, Scene};
 use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
 use crate::visit::StateVisitor;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, Dim, SVector, U4, U6};
+use nalgebra::{DefaultAllocator, Dim, Dyn, SVector, U4, U6};
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
 /// one, so boxing would only add an indirection to every piece.
@@ -33,6 +33,9 @@ pub enum PhiInput {
 #[derive(Clone, Debug)]
 pub struct Run {
     model: BeamBody,
+    /// The beam in n elements, or damped: `None` for the paper's model, which `model`
+    /// integrates alone.
+    elements: Option<Box<BeamBodyN>>,
     formulation: Formulation,
     input: PhiInput,
     /// The piece of φ in use: what the right-hand side evaluates.
@@ -76,6 +79,15 @@ pub fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> Two
     TwoDofSystem { model, phi, linear: formulation == Formulation::Linear, range_check: true }
 }
 
+/// The system of the beam in n elements on piece `phi`.
+pub fn elements_system(
+    model: &BeamBodyN,
+    phi: PhiPiece,
+    formulation: Formulation,
+) -> ElementsSystem<'_> {
+    ElementsSystem { model, phi, formulation, range_check: true }
+}
+
 /// The system of the six-state formulations (dae, dae_stabilized) on piece `phi`.
 pub fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
     let stabilized = formulation == Formulation::DaeStabilized;
@@ -93,13 +105,15 @@ pub fn dae_start(system: &DaeSystem<'_>, init: &InitialState) -> SVector<f64, 6>
     system.consistent(&free)
 }
 
-/// Four states (reduced, linear) or six (dae, dae_stabilized). The variants differ by
-/// 0.5 kB; a run holds one, so boxing would only add an indirection to every step.
+/// The paper's model: four states (reduced, linear) or six (dae, dae_stabilized), on the
+/// stack. The variants differ by 0.5 kB; a run holds one, so boxing would only add an
+/// indirection to every step. The beam in n elements: 4n or 4n + 2 states, on the heap.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Integrator {
     TwoDof(Bdf<U4>),
     Dae(Bdf<U6>),
+    Elements(Bdf<Dyn>),
 }
 
 impl Run {
@@ -110,6 +124,10 @@ impl Run {
         let input = scene.phi_source == PhiSource::Input;
         let phi0 = if input { first.phi } else { scene.law.eval(t0).phi };
         let model = scene.check_model(phi0).map_err(SimError::Setting)?;
+        let elements = (!scene.params.is_paper_model())
+            .then(|| BeamBodyN::new(scene.params).map(Box::new))
+            .transpose()
+            .map_err(SimError::Setting)?;
         let (formulation, init) = (scene.formulation, scene.initial);
         let config = scene.solver_config(max_steps);
         let mut run = if input {
@@ -118,6 +136,9 @@ impl Run {
         } else {
             Run::with_law(model, formulation, &config, t0, init, scene.law)?
         };
+        if let Some(elements) = elements {
+            run.use_elements(elements, &config, t0, init)?;
+        }
         run.set_range_check(scene.range_check);
         Ok(run)
     }
@@ -165,6 +186,7 @@ impl Run {
         };
         Ok(Self {
             model,
+            elements: None,
             formulation,
             input,
             piece,
@@ -177,8 +199,29 @@ impl Run {
         })
     }
 
+    /// Integrates the beam in n elements (or damped) instead of the paper's model, from
+    /// the same initial state (the tip's values, [`ElementsSystem::start`]).
+    fn use_elements(
+        &mut self,
+        elements: Box<BeamBodyN>,
+        options: &BdfConfig,
+        t0: f64,
+        init: InitialState,
+    ) -> Result<(), SolverError> {
+        let sys = elements_system(&elements, self.piece, self.formulation);
+        let y0 = sys.start(init.v1, init.theta1, init.dv1, init.dtheta1);
+        self.bdf = Integrator::Elements(Bdf::new(*options, t0, y0)?);
+        self.elements = Some(elements);
+        Ok(())
+    }
+
     pub fn model(&self) -> &BeamBody {
         &self.model
+    }
+
+    /// The beam in n elements, when the run integrates it.
+    pub fn elements(&self) -> Option<&BeamBodyN> {
+        self.elements.as_deref()
     }
 
     pub fn formulation(&self) -> Formulation {
@@ -194,6 +237,7 @@ impl Run {
         match &self.bdf {
             Integrator::TwoDof(b) => b.t(),
             Integrator::Dae(b) => b.t(),
+            Integrator::Elements(b) => b.t(),
         }
     }
 
@@ -206,6 +250,7 @@ impl Run {
         match &self.bdf {
             Integrator::TwoDof(b) => *b.stats(),
             Integrator::Dae(b) => *b.stats(),
+            Integrator::Elements(b) => *b.stats(),
         }
     }
 
@@ -295,6 +340,7 @@ impl Run {
         match &mut self.bdf {
             Integrator::TwoDof(b) => b.reinit(b.t(), *b.y()),
             Integrator::Dae(b) => b.reinit(b.t(), *b.y()),
+            Integrator::Elements(b) => b.reinit(b.t(), b.y().clone()),
         }
     }
 
@@ -304,6 +350,11 @@ impl Run {
 
     fn dae(&self) -> DaeSystem<'_> {
         dae(&self.model, self.piece, self.formulation)
+    }
+
+    fn elements_system(&self) -> ElementsSystem<'_> {
+        let model = self.elements.as_deref().expect("a run of elements has its model");
+        elements_system(model, self.piece, self.formulation)
     }
 
     /// Steps until t ≥ `tout`, never past `tstop`, through the law's breakpoint.
@@ -348,6 +399,7 @@ impl Run {
                 return Ok(());
             }
             let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
+            let elements_model = self.elements.as_deref();
             let range_check = self.range != RangeCheck::Off;
             let probe = std::mem::take(&mut self.untested_join);
             let result = match &mut self.bdf {
@@ -357,6 +409,14 @@ impl Run {
                 }
                 Integrator::Dae(b) => {
                     let sys = DaeSystem { range_check, ..dae(model, piece, formulation) };
+                    advance_probing(b, &sys, tout, tstop, probe)
+                }
+                Integrator::Elements(b) => {
+                    let model = elements_model.expect("a run of elements has its model");
+                    let sys = ElementsSystem {
+                        range_check,
+                        ..elements_system(model, piece, formulation)
+                    };
                     advance_probing(b, &sys, tout, tstop, probe)
                 }
             };
@@ -388,6 +448,7 @@ impl Run {
         match &self.bdf {
             Integrator::TwoDof(b) => b.reaches_back_to(t),
             Integrator::Dae(b) => b.reaches_back_to(t),
+            Integrator::Elements(b) => b.reaches_back_to(t),
         }
     }
 
@@ -402,6 +463,7 @@ impl Run {
         Ok(match &self.bdf {
             Integrator::TwoDof(b) => self.two_dof().kinematics(t, &b.interpolate(t)?),
             Integrator::Dae(b) => self.dae().kinematics(t, &b.interpolate(t)?),
+            Integrator::Elements(b) => self.elements_system().kinematics(t, &b.interpolate(t)?),
         })
     }
 
@@ -423,6 +485,11 @@ impl Run {
                 }
                 out.copy_from_slice(y.as_slice());
                 Ok(6)
+            }
+            Integrator::Elements(b) => {
+                let k = self.elements_system().kinematics(t, &b.interpolate(t)?);
+                out[..4].copy_from_slice(&[k.v1, k.theta1, k.dv1, k.dtheta1]);
+                Ok(4)
             }
         }
     }
@@ -471,6 +538,7 @@ impl Run {
         match &mut self.bdf {
             Integrator::TwoDof(b) => b.visit_state(v),
             Integrator::Dae(b) => b.visit_state(v),
+            Integrator::Elements(b) => b.visit_state(v),
         }
     }
 
@@ -497,6 +565,7 @@ impl Run {
         match &self.bdf {
             Integrator::TwoDof(b) => b.check_state(),
             Integrator::Dae(b) => b.check_state(),
+            Integrator::Elements(b) => b.check_state(),
         }
         .map_err(|e| e.to_string())
     }
