@@ -121,6 +121,7 @@ pub enum Key {
     NElements,
     DampingAlpha,
     DampingBeta,
+    DampingRatio,
     TRot,
     PhiEnd,
     Phi0,
@@ -325,7 +326,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 33] = [
+pub const SETTINGS: [Setting; 34] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -375,6 +376,16 @@ pub const SETTINGS: [Setting; 33] = [
         Real(0.0),
         "Rayleigh damping of the beam: beta times its stiffness matrix (0: none, as in the \
          paper)",
+        PHYSICAL,
+    ),
+    row(
+        K::DampingRatio,
+        "damping_ratio",
+        Kind::Real { unit: None },
+        NonNegative,
+        Real(0.0),
+        "Rayleigh damping of the beam set by the damping ratio zeta of its own first two modes \
+         (the cantilever without the body); alpha and beta follow: give either this or them",
         PHYSICAL,
     ),
     row(

@@ -1,7 +1,7 @@
 //! Model-level tests through the driver: conservation, agreement between formulations,
 //! linearisation order, constraint drift, the paper's fixed-step mode.
 
-use beam_body::model::{BeamBody, Formulation, Outputs};
+use beam_body::model::{BeamBody, BeamBodyN, Formulation, Outputs};
 use beam_body::sim::{simulate, Scene};
 use beam_body::solver::Stats;
 use std::f64::consts::PI;
@@ -215,5 +215,65 @@ fn divergence_above_buckling_stops_with_a_clear_message() {
         assert!(err.contains("outside the model's range of validity"), "{formulation}: {err}");
         assert!(err.contains("v1") || err.contains("theta1"), "{err}");
         assert!(last_t > 0.1 && last_t < 10.2, "{formulation}: stopped after t = {last_t}");
+    }
+}
+
+/// The logarithmic decrement of the first mode at rest is its damping ratio: free vibration
+/// in a mode of ratio ζ decays as x_{k+1}/x_k = exp(−2πζ/√(1 − ζ²)) per period (Chopra,
+/// *Dynamics of Structures*, §2.2.4), with ζ_1 = φ_1ᵀDφ_1/(2ω_1) of the mode of beam and body
+/// (`modal_damping`). `damping_ratio` = ζ gives the beam's own first two modes (without the
+/// body) ζ; the first mode of beam and body, whose kinetic energy is mostly the body's, gets
+/// less. The start is the cubic of a tip load (θ1 = 1.5·v1/l), close to the first mode; the
+/// higher modes it also excites decay faster in time, and the peaks are taken after them.
+#[test]
+fn the_logarithmic_decrement_of_the_first_mode_is_the_damping_ratio() {
+    for (n, zeta) in [(1, 0.02), (4, 0.02), (4, 0.05)] {
+        let l = 2.5;
+        let v0 = 0.01;
+        let scene = with(
+            Scene::default(),
+            &[
+                ("phi_end", "0"),
+                ("n_elements", &n.to_string()),
+                ("damping_ratio", &zeta.to_string()),
+                ("v1_0", &v0.to_string()),
+                ("theta1_0", &(1.5 * v0 / l).to_string()),
+                ("t_end", "20"),
+                ("dt_out", "0.0005"),
+                ("rtol", "1e-9"),
+            ],
+        );
+        let (rows, _) = run(&scene);
+        // The largest v1 of each period, between upward zero crossings, after 4 s (the
+        // second mode, at ten times the frequency, rides on the first; it decays as fast per
+        // period of its own, ten times faster in time).
+        let mut peaks = Vec::new();
+        let mut current: Option<f64> = None;
+        for w in rows.windows(2).filter(|w| w[0].t > 4.0) {
+            if w[0].v1 < 0.0 && w[1].v1 >= 0.0 {
+                if let Some(p) = current {
+                    peaks.push(p);
+                }
+                current = Some(w[1].v1);
+            } else if let Some(p) = current.as_mut() {
+                *p = p.max(w[1].v1);
+            }
+        }
+        assert!(peaks.len() >= 4, "n = {n}: {} peaks", peaks.len());
+        let periods = (peaks.len() - 1) as f64;
+        let delta = beam_body::math::ln(peaks[0] / peaks[peaks.len() - 1]) / periods;
+        let measured = delta / (4.0 * PI * PI + delta * delta).sqrt();
+        let params = beam_body::model::Params {
+            n_elements: n,
+            damping_ratio: zeta,
+            ..beam_body::model::Params::default()
+        };
+        let want = BeamBodyN::new(params).unwrap().modal_damping(0.0).unwrap()[0];
+        let rel = (measured - want).abs() / want;
+        assert!(
+            rel < 0.03 && want > 0.1 * zeta && want < zeta,
+            "n = {n}, ζ = {zeta}: decrement gives ζ_1 = {measured}, the mode's ratio is {want} \
+             ({rel:.2e} off)"
+        );
     }
 }

@@ -123,6 +123,7 @@ pub enum Var {
     NElements,
     DampingAlpha,
     DampingBeta,
+    DampingRatio,
 }
 
 impl Var {
@@ -304,6 +305,7 @@ pub const VARIABLES: &[Variable] = &[
     param(Var::NElements, Key::NElements),
     param(Var::DampingAlpha, Key::DampingAlpha),
     param(Var::DampingBeta, Key::DampingBeta),
+    param(Var::DampingRatio, Key::DampingRatio),
 ];
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the

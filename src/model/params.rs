@@ -23,6 +23,9 @@ pub struct Params {
     /// Rayleigh damping of the beam, D = αM_b + βK: α [1/s] and β [s], each ≥ 0. Default 0.
     pub damping_alpha: f64,
     pub damping_beta: f64,
+    /// Rayleigh damping given as the ratio ζ ≥ 0 of the first two modes at rest at φ = 0,
+    /// instead of α and β. Default 0.
+    pub damping_ratio: f64,
 }
 
 impl Default for Params {
@@ -38,6 +41,7 @@ impl Default for Params {
             n_elements: 1,
             damping_alpha: 0.0,
             damping_beta: 0.0,
+            damping_ratio: 0.0,
         }
     }
 }
@@ -86,13 +90,17 @@ impl Params {
         let elements = Range::Integers(1, super::MAX_ELEMENTS as i64);
         check("n_elements", self.n_elements as f64, elements)?;
         check("damping_alpha", self.damping_alpha, Range::NonNegative)?;
-        check("damping_beta", self.damping_beta, Range::NonNegative)
+        check("damping_beta", self.damping_beta, Range::NonNegative)?;
+        check("damping_ratio", self.damping_ratio, Range::NonNegative)
     }
 
     /// Whether these are the paper's model: one element and no damping, which the
     /// two-coordinate equations of `dynamics.rs` integrate on the stack.
     pub fn is_paper_model(&self) -> bool {
-        self.n_elements == 1 && self.damping_alpha == 0.0 && self.damping_beta == 0.0
+        self.n_elements == 1
+            && self.damping_alpha == 0.0
+            && self.damping_beta == 0.0
+            && self.damping_ratio == 0.0
     }
 }
 

@@ -53,10 +53,11 @@ starts. A closed stdout (`| head`) stops the run at once.
             settings_help()
         ),
         "modes" => format!(
-            "usage: beam-body modes [SCENE.toml] [OPTIONS]
+            "usage: beam-body modes [SCENE.toml] [OPTIONS] [--count K]
 
 Small-oscillation periods of the scene's model about its static equilibrium with the
-body held at phi = 0, pi/2 and pi.
+body held at phi = 0, pi/2 and pi: the first two, or the first K (at most 2*n_elements)
+with --count K.
 
 {}{}",
             options_help(false),
@@ -147,6 +148,8 @@ pub struct SceneArgs {
     pub output: Option<String>,
     /// The settings set on the command line (by `--set` or a flag), by name.
     pub given: Vec<&'static str>,
+    /// `modes --count K`: how many modes.
+    pub count: Option<usize>,
 }
 
 /// Parses `[SCENE.toml] [--set NAME=VALUE | --FLAG VALUE]... [-o FILE]` for `command`:
@@ -155,7 +158,7 @@ pub struct SceneArgs {
 pub fn scene_args(command: &str, args: Vec<OsString>) -> Result<Option<SceneArgs>, Failure> {
     let output_allowed = command == "simulate";
     let mut parser = lexopt::Parser::from_args(args);
-    let (mut file, mut output) = (None, None);
+    let (mut file, mut output, mut count) = (None, None, None);
     let mut sets: Vec<(&'static Setting, String, String)> = Vec::new();
     let bad =
         |e: lexopt::Error| Failure::Usage(format!("{command}: {e} (beam-body {command} --help)"));
@@ -175,6 +178,13 @@ pub fn scene_args(command: &str, args: Vec<OsString>) -> Result<Option<SceneArgs
             }
             Short('o') | Long("output") if output_allowed => {
                 output = Some(text(parser.value().map_err(bad)?, "-o")?);
+            }
+            Long("count") if command == "modes" => {
+                let value = text(parser.value().map_err(bad)?, "--count")?;
+                let k = value.parse::<usize>().ok().filter(|k| (1..=64).contains(k));
+                count = Some(k.ok_or_else(|| {
+                    Failure::Usage(format!("--count {value}: must be an integer in 1..=64"))
+                })?);
             }
             Long(flag) => {
                 let flag = format!("--{flag}");
@@ -201,7 +211,7 @@ pub fn scene_args(command: &str, args: Vec<OsString>) -> Result<Option<SceneArgs
         checked.map_err(|e| Failure::Usage(format!("{typed}: {e}")))?;
     }
     let given = sets.iter().map(|(s, _, _)| s.name).collect();
-    Ok(Some(SceneArgs { scene, file, output, given }))
+    Ok(Some(SceneArgs { scene, file, output, given, count }))
 }
 
 /// An argument as UTF-8 text.

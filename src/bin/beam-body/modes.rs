@@ -2,7 +2,7 @@
 
 use crate::args::scene_args;
 use crate::{print, CmdResult};
-use beam_body::model::BeamBody;
+use beam_body::model::{BeamBody, BeamBodyN};
 use std::f64::consts::PI;
 use std::ffi::OsString;
 use std::fmt::Write;
@@ -11,22 +11,40 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
     let Some(cli) = scene_args("modes", args)? else {
         return Ok(());
     };
-    let model = BeamBody::new(cli.scene.params).map_err(|e| e.to_string())?;
-    let mut text = format!(
-        "{:<6}  {:>19}  {:>19}  {:>17}  {:>17}\n",
-        "phi", "v1_eq [m]", "theta1_eq [rad]", "T1 [s]", "T2 [s]"
-    );
-    for (label, phi) in [("0", 0.0), ("pi/2", PI / 2.0), ("pi", PI)] {
-        let m = model.modes(phi);
-        let fmt = |p: Option<f64>| p.map_or("unstable".to_string(), |t| format!("{t:.15}"));
-        let [t1, t2] = m.periods();
-        let (v, th) = m.equilibrium;
-        let _ = writeln!(
-            text,
-            "{label:<6}  {v:>+19.12e}  {th:>+19.12e}  {:>17}  {:>17}",
-            fmt(t1),
-            fmt(t2)
-        );
+    let params = cli.scene.params;
+    // (φ, equilibrium (v1, ϑ1), ω² ascending) at each held angle.
+    let angles = [("0", 0.0), ("pi/2", PI / 2.0), ("pi", PI)];
+    let mut rows = Vec::new();
+    if params.is_paper_model() && cli.count.is_none() {
+        let model = BeamBody::new(params).map_err(|e| e.to_string())?;
+        for (label, phi) in angles {
+            let m = model.modes(phi);
+            rows.push((label, m.equilibrium, m.omega2.to_vec()));
+        }
+    } else {
+        let model = BeamBodyN::new(params)?;
+        let tip = model.beam.tip();
+        for (label, phi) in angles {
+            let (q, omega2) = model.modes(phi).ok_or_else(|| {
+                format!("no static equilibrium found with the body held at phi = {label}")
+            })?;
+            rows.push((label, (q[tip], q[tip + 1]), omega2));
+        }
+    }
+    let count = cli.count.unwrap_or(2).min(rows[0].2.len());
+    let mut text = format!("{:<6}  {:>19}  {:>19}", "phi", "v1_eq [m]", "theta1_eq [rad]");
+    for k in 1..=count {
+        let _ = write!(text, "  {:>17}", format!("T{k} [s]"));
+    }
+    text.push('\n');
+    for (label, (v, th), omega2) in rows {
+        let _ = write!(text, "{label:<6}  {v:>+19.12e}  {th:>+19.12e}");
+        for w2 in &omega2[..count] {
+            let period = (*w2 > 0.0).then(|| 2.0 * PI / w2.sqrt());
+            let shown = period.map_or("unstable".to_string(), |t| format!("{t:.15}"));
+            let _ = write!(text, "  {shown:>17}");
+        }
+        text.push('\n');
     }
     print(&text)
 }
