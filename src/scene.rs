@@ -90,6 +90,8 @@ pub struct Scene {
     pub dt_out: f64,
     /// Most output rows (and communication steps of an emulated host) a run may have.
     pub max_rows: u64,
+    /// `columns = beam`: the CLI's CSV has the beam's columns too.
+    pub beam_columns: bool,
 }
 
 impl Default for Scene {
@@ -117,6 +119,7 @@ impl Default for Scene {
             t_end: 10.0,
             dt_out: 0.01,
             max_rows: 1,
+            beam_columns: false,
         };
         for s in &SETTINGS {
             scene.put(s.key, s.default);
@@ -174,6 +177,7 @@ impl Scene {
             Key::TEnd => Real(self.t_end),
             Key::DtOut => Real(self.dt_out),
             Key::MaxRows => Integer(self.max_rows as i64),
+            Key::Columns => Choice(usize::from(self.beam_columns)),
         }
     }
 
@@ -261,6 +265,7 @@ impl Scene {
             Key::TEnd => self.t_end = real(value),
             Key::DtOut => self.dt_out = real(value),
             Key::MaxRows => self.max_rows = int(value),
+            Key::Columns => self.beam_columns = choice(value) == 1,
         }
     }
 

@@ -81,7 +81,20 @@ pub const RANGE_CHECK_TYPE: EnumType = EnumType {
     ],
 };
 
-/// Every enumeration of the table, in the order of the model description.
+pub const COLUMNS_TYPE: EnumType = EnumType {
+    name: "Columns",
+    description: "The columns of a CLI run's CSV",
+    items: &[
+        ("paper", "time, the tip's motion, phi, the hinge reactions, energy and drift"),
+        (
+            "beam",
+            "those, then the root's bending moment and shear force and the deflection at l/4, \
+             l/2, 3l/4",
+        ),
+    ],
+};
+
+/// Every enumeration of the FMU's table, in the order of the model description.
 pub const ENUM_TYPES: &[EnumType] =
     &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE];
 
@@ -145,6 +158,7 @@ pub enum Key {
     TEnd,
     DtOut,
     MaxRows,
+    Columns,
 }
 
 /// Where a setting appears besides the scene (every setting is a scene key).
@@ -326,7 +340,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 34] = [
+pub const SETTINGS: [Setting; 35] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -582,6 +596,16 @@ pub const SETTINGS: [Setting; 34] = [
         "Most output rows a CLI run or a study case may have (t_end/dt_out + 1); a run that \
          would have more is refused before it starts",
         flag(false, "--max-rows"),
+    ),
+    row(
+        K::Columns,
+        "columns",
+        Kind::Choice(&COLUMNS_TYPE),
+        Finite,
+        Choice(0),
+        "Columns of a CLI run's CSV: paper (the default), or beam (and the loads at the root \
+         and the deflection at the quarter points; the FMU has them as outputs)",
+        flag(false, "--columns"),
     ),
 ];
 

@@ -277,3 +277,33 @@ fn the_logarithmic_decrement_of_the_first_mode_is_the_damping_ratio() {
         );
     }
 }
+
+/// At rest the bending moment at the clamp balances the moment of the loads about it: the
+/// body's weight M2·g along x at its centre y_C = v1 + r·sin θ gives M_root = −M2·g·y_C, and
+/// no transverse load, Q_root = 0; with the body held at π/2 the beam is bent
+/// (v1 ≈ −0.14 m). Damping brings the turn to rest; the root's loads are the clamp's
+/// consistent reactions of the first element, with any number of elements.
+#[test]
+fn at_rest_the_root_moment_balances_the_body_s_weight() {
+    for n in [1, 4] {
+        let scene = with(
+            Scene::default(),
+            &[
+                ("phi_end", &(PI / 2.0).to_string()),
+                ("n_elements", &n.to_string()),
+                ("damping_ratio", "0.3"),
+                ("t_end", "60"),
+                ("dt_out", "60"),
+            ],
+        );
+        let (rows, _) = run(&scene);
+        let o = rows.last().unwrap();
+        let (m2, g, r) = (12.0, 10.0, 0.5);
+        let y_c = o.v1 + r * beam_body::math::sin(o.theta1 + PI / 2.0);
+        let (shear, moment) = o.root;
+        let want = -m2 * g * y_c;
+        assert!(o.v1 < -0.1, "bent: v1 = {}", o.v1);
+        assert!((moment - want).abs() < 1e-4 * want.abs(), "n = {n}: {moment} vs {want}");
+        assert!(shear.abs() < 1e-4, "n = {n}: Q_root = {shear}");
+    }
+}

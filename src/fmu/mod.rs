@@ -14,7 +14,7 @@ pub mod values;
 pub mod variables;
 
 use crate::fmi::{self, Notes, Restore, Setup, State, StepFailure, Value};
-use crate::model::{BeamBody, Kinematics};
+use crate::model::{BeamBody, Kinematics, Reactions};
 use crate::scene::PhiSource;
 use crate::sim::Run;
 use crate::solver::check_rtol;
@@ -94,18 +94,33 @@ impl BeamBodyFmu {
         }
     }
 
+    /// The hinge reactions at the current time, computed at the first request.
+    fn reactions(&mut self, k: &Kinematics) -> Result<Reactions, String> {
+        let r = match self.cache.reactions {
+            Some(r) => r,
+            None => k.reactions(&self.model()?),
+        };
+        self.cache.reactions = Some(r);
+        Ok(r)
+    }
+
     /// The value of output `var` at the current time, its group computed if needed.
     fn output(&mut self, var: Var, setup: &Setup) -> Result<f64, String> {
         let k = self.kinematics(setup)?;
         Ok(match outputs::group(var).expect("only outputs come here") {
             Group::Motion => outputs::motion(var, &k).expect("a motion output"),
             Group::Reactions => {
-                let r = match self.cache.reactions {
-                    Some(r) => r,
-                    None => k.reactions(&self.model()?),
-                };
-                self.cache.reactions = Some(r);
+                let r = self.reactions(&k)?;
                 outputs::reaction(var, &r).expect("a reaction output")
+            }
+            Group::Root => {
+                let r = self.reactions(&k)?;
+                let (shear, moment) = k.root_loads(&self.model()?, &r);
+                if var == Var::MRoot {
+                    moment
+                } else {
+                    shear
+                }
             }
             Group::Energy => {
                 let e = match self.cache.energy {

@@ -12,6 +12,8 @@ pub enum Group {
     Motion,
     Reactions,
     Energy,
+    /// The loads at the root, from the motion and the hinge's axial force.
+    Root,
 }
 
 /// The outputs at the communication time, by group, each computed at its first request
@@ -28,6 +30,8 @@ pub fn group(var: Var) -> Option<Group> {
     Some(match var {
         Var::N | Var::P | Var::Moment => Group::Reactions,
         Var::Energy => Group::Energy,
+        Var::MRoot | Var::QRoot => Group::Root,
+        Var::VQuarter | Var::VMid | Var::VThreeQuarter => Group::Motion,
         Var::V1
         | Var::Theta1
         | Var::U2
@@ -55,6 +59,9 @@ pub fn motion(var: Var, k: &Kinematics) -> Option<f64> {
         Var::PhiApplied => k.phi.phi,
         Var::DphiApplied => k.phi.dphi,
         Var::DdphiApplied => k.phi.ddphi,
+        Var::VQuarter => k.quarter[0],
+        Var::VMid => k.quarter[1],
+        Var::VThreeQuarter => k.quarter[2],
         _ => return None,
     })
 }

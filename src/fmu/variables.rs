@@ -124,6 +124,11 @@ pub enum Var {
     DampingAlpha,
     DampingBeta,
     DampingRatio,
+    MRoot,
+    QRoot,
+    VQuarter,
+    VMid,
+    VThreeQuarter,
 }
 
 impl Var {
@@ -306,6 +311,21 @@ pub const VARIABLES: &[Variable] = &[
     param(Var::DampingAlpha, Key::DampingAlpha),
     param(Var::DampingBeta, Key::DampingBeta),
     param(Var::DampingRatio, Key::DampingRatio),
+    output(
+        Var::MRoot,
+        "M_root",
+        "N.m",
+        "Bending moment of the beam at the clamp, EI*v''(0) (the clamp's consistent reaction)",
+    ),
+    output(
+        Var::QRoot,
+        "Q_root",
+        "N",
+        "Shear force of the beam at the clamp, EI*v'''(0) (the clamp's consistent reaction)",
+    ),
+    output(Var::VQuarter, "v_quarter", "m", "Deflection of the beam at x = l/4"),
+    output(Var::VMid, "v_mid", "m", "Deflection of the beam at x = l/2"),
+    output(Var::VThreeQuarter, "v_three_quarter", "m", "Deflection of the beam at x = 3l/4"),
 ];
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the

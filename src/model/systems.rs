@@ -75,6 +75,21 @@ pub struct Kinematics {
     /// The beam's kinetic and strain energy [J] of a beam in n elements; `None` for the
     /// paper's, whose energy follows from (v1, ϑ1) and their rates.
     pub beam_energy: Option<f64>,
+    /// The first node's (x = l/n) deflection and slope, their rates and accelerations (the
+    /// tip's with one element), for the loads at the root.
+    pub node1: [f64; 6],
+    /// The deflection at x = l/4, l/2 and 3l/4 [m].
+    pub quarter: [f64; 3],
+    /// Rayleigh's (α, β) of the beam in use.
+    pub rayleigh: (f64, f64),
+}
+
+/// The deflection of the paper's single element at l/4, l/2 and 3l/4 for tip values
+/// (v1, ϑ1): v = v1(3ξ² − 2ξ³) + lϑ1(ξ³ − ξ²).
+fn quarter_points(l: f64, v1: f64, theta1: f64) -> [f64; 3] {
+    [0.25, 0.5, 0.75].map(|xi: f64| {
+        v1 * (3.0 * xi * xi - 2.0 * xi * xi * xi) + l * theta1 * (xi * xi * xi - xi * xi)
+    })
 }
 
 impl Kinematics {
@@ -95,8 +110,22 @@ impl Kinematics {
         }
     }
 
+    /// The shear force and bending moment at the clamp [N, N·m] (`elements::root_loads`),
+    /// given the hinge reactions.
+    pub fn root_loads(&self, model: &BeamBody, reactions: &Reactions) -> (f64, f64) {
+        let p = &model.params;
+        super::elements::root_loads(
+            p.n_elements,
+            (p.l, p.ei, p.m),
+            self.rayleigh,
+            self.node1,
+            reactions.n,
+        )
+    }
+
     /// Everything, the reactions and the energy included.
     pub fn outputs(&self, model: &BeamBody) -> Outputs {
+        let reactions = self.reactions(model);
         Outputs {
             t: self.t,
             v1: self.v1,
@@ -106,9 +135,11 @@ impl Kinematics {
             dtheta1: self.dtheta1,
             du2: self.du2,
             phi: self.phi,
-            reactions: self.reactions(model),
+            reactions,
             energy: self.energy(model),
             drift: self.drift,
+            root: self.root_loads(model, &reactions),
+            quarter: self.quarter,
         }
     }
 }
@@ -131,6 +162,10 @@ pub struct Outputs {
     pub energy: f64,
     /// Constraint residual u2 − u1(v1, ϑ1) [m]: identically 0 where u2 is computed from (21).
     pub drift: f64,
+    /// The shear force [N] and bending moment [N·m] at the clamp.
+    pub root: (f64, f64),
+    /// The deflection at x = l/4, l/2 and 3l/4 [m].
+    pub quarter: [f64; 3],
 }
 
 impl Outputs {
@@ -153,6 +188,20 @@ impl Outputs {
         ("energy", "J"),
         ("drift", "m"),
     ];
+
+    /// The beam's columns, after [`COLUMNS`](Self::COLUMNS) when asked for (`columns =
+    /// beam`), in the order of [`beam_values`](Self::beam_values).
+    pub const BEAM_COLUMNS: [(&'static str, &'static str); 5] = [
+        ("M_root", "N.m"),
+        ("Q_root", "N"),
+        ("v_quarter", "m"),
+        ("v_mid", "m"),
+        ("v_three_quarter", "m"),
+    ];
+
+    pub fn beam_values(&self) -> [f64; 5] {
+        [self.root.1, self.root.0, self.quarter[0], self.quarter[1], self.quarter[2]]
+    }
 
     pub fn values(&self) -> [f64; 15] {
         [
@@ -213,6 +262,9 @@ impl TwoDofSystem<'_> {
             phi,
             drift: 0.0,
             beam_energy: None,
+            node1: [q[0], q[1], qd[0], qd[1], acc[0], acc[1]],
+            quarter: quarter_points(l, q[0], q[1]),
+            rayleigh: (0.0, 0.0),
         }
     }
 
@@ -283,6 +335,9 @@ impl DaeSystem<'_> {
             phi,
             drift: x[2] - u1(self.model.params.l, x[0], x[1]),
             beam_energy: None,
+            node1: [x[0], x[1], xd[0], xd[1], acc[0], acc[1]],
+            quarter: quarter_points(self.model.params.l, x[0], x[1]),
+            rayleigh: (0.0, 0.0),
         }
     }
 

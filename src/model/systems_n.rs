@@ -124,6 +124,9 @@ impl ElementsSystem<'_> {
             phi: self.phi.eval(t),
             drift,
             beam_energy: Some(t1 + p1),
+            node1: [q[0], q[1], qd[0], qd[1], acc[0], acc[1]],
+            quarter: [0.25, 0.5, 0.75].map(|f| self.model.beam.field(q, f * self.model.beam.l)[0]),
+            rayleigh: self.model.rayleigh(),
         }
     }
 }

@@ -58,8 +58,13 @@ UNITS = "s,m,rad,m,m/s,rad/s,m/s,rad,rad/s,rad/s2,N,N,N.m,J,m".split(",")
 HEADER = [f"{c} [{u}]" for c, u in zip(COLUMNS, UNITS)]
 
 
+BEAM_COLUMNS = "M_root,Q_root,v_quarter,v_mid,v_three_quarter".split(",")
+BEAM_UNITS = "N.m,N,m,m,m".split(",")
+
+
 def read_csv(text: str) -> dict:
-    """The CLI's CSV output as {column name without its unit: numpy array}; checks the header."""
+    """The CLI's CSV output as {column name without its unit: numpy array}; checks the header: the
+    paper's columns, and the beam's after them (`--columns beam`) if present."""
     import csv
     import io
 
@@ -68,10 +73,15 @@ def read_csv(text: str) -> dict:
     rows = list(csv.reader(io.StringIO(text)))
     assert rows, "empty CSV"
     header = [h.strip() for h in rows[0]]
-    assert header == HEADER, f"CSV header {header} != {HEADER}"
+    columns = COLUMNS
+    if len(header) > len(HEADER):
+        columns = COLUMNS + BEAM_COLUMNS
+        assert header == HEADER + [f"{c} [{u}]" for c, u in zip(BEAM_COLUMNS, BEAM_UNITS)], header
+    else:
+        assert header == HEADER, f"CSV header {header} != {HEADER}"
     data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)
-    assert data.ndim == 2 and data.shape[1] == len(COLUMNS)
-    return {c: data[:, i] for i, c in enumerate(COLUMNS)}
+    assert data.ndim == 2 and data.shape[1] == len(columns)
+    return {c: data[:, i] for i, c in enumerate(columns)}
 
 
 def set_args(params: dict) -> list[str]:

@@ -38,8 +38,13 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         None => stdout_failed(e),
         Some(path) => Failure::Usage(format!("writing {path} failed: {e}")),
     };
-    let header: Vec<String> =
-        Outputs::COLUMNS.iter().map(|(name, unit)| csv::header(name, Some(unit))).collect();
+    let beam = scene.beam_columns;
+    let extra = if beam { &Outputs::BEAM_COLUMNS[..] } else { &[] };
+    let header: Vec<String> = Outputs::COLUMNS
+        .iter()
+        .chain(extra)
+        .map(|(name, unit)| csv::header(name, Some(unit)))
+        .collect();
     writeln!(out, "{}", header.join(",")).map_err(|e| failed(e, &cli.output))?;
 
     let mut io_error = None;
@@ -54,6 +59,12 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
                 line.push(',');
             }
             csv::push_number(&mut line, *v);
+        }
+        if beam {
+            for v in o.beam_values() {
+                line.push(',');
+                csv::push_number(&mut line, v);
+            }
         }
         line.push('\n');
         // The first failed write ends the run: nothing is computed for a closed pipe.

@@ -206,3 +206,39 @@ def test_the_csv_names_its_units_and_its_numbers_read_back_exactly(beam_body):
     for field in lines[2].split(","):
         assert repr(float(field)) == field or float(repr(float(field))) == float(field)
         assert not math.isnan(float(field))
+
+
+def test_beam_columns_are_added_after_the_paper_s_and_change_nothing_else(beam_body):
+    """`--columns beam` appends M_root, Q_root and the deflection at l/4, l/2, 3l/4; the paper's
+    15 columns stay as they are, byte for byte, and with one element the quarter points are the
+    paper's cubic through the tip's deflection and slope."""
+    args = ["simulate", str(REPO / "scenes" / "paper.toml"), "--set", "t_end=1", "--set", "dt_out=0.1"]
+    plain = run_cli(beam_body, args)
+    beam = run_cli(beam_body, args + ["--columns", "beam"])
+    p_lines, b_lines = plain.splitlines(), beam.splitlines()
+    assert len(p_lines) == len(b_lines) == 12
+    for p, b in zip(p_lines, b_lines):
+        cells = b.split(",")
+        assert ",".join(cells[:15]) == p and len(cells) == 20
+    assert b_lines[0].split(",")[15:] == [
+        "M_root [N.m]", "Q_root [N]", "v_quarter [m]", "v_mid [m]", "v_three_quarter [m]"]
+    rows = read_csv(beam)
+    l = 2.5
+    for xi, name in ((0.25, "v_quarter"), (0.5, "v_mid"), (0.75, "v_three_quarter")):
+        cubic = rows["v1"] * (3 * xi**2 - 2 * xi**3) + l * rows["theta1"] * (xi**3 - xi**2)
+        assert max(abs(cubic - rows[name])) <= 1e-15 * max(abs(rows["v1"])) + 1e-300
+
+
+@pytest.mark.parametrize("value", ["0", "33", "2.5"])
+def test_an_element_count_out_of_range_is_refused_naming_the_setting(beam_body, value):
+    r = subprocess.run([str(beam_body), "simulate", str(REPO / "scenes" / "paper.toml"), "--elements", value],
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "n_elements" in r.stderr and "1..=32" in r.stderr, r.stderr
+
+
+def test_negative_damping_is_refused_naming_the_setting(beam_body):
+    for name in ("damping_alpha", "damping_beta", "damping_ratio"):
+        r = subprocess.run([str(beam_body), "simulate", str(REPO / "scenes" / "paper.toml"), "--set", f"{name}=-0.1"],
+                           capture_output=True, text=True)
+        assert r.returncode == 2 and name in r.stderr and "non-negative" in r.stderr, r.stderr
