@@ -379,31 +379,40 @@ impl OdeSystem<U4> for NoJacobian {
     }
 }
 
-/// The solver in a run-time dimension computes what it computes in the fixed one, bit for
-/// bit: the steps, the orders the stability guard allows (ω = 30, in BDF3–5's band at rtol
-/// 1e-5), the finite-difference Jacobian and its LU, the dense output; and its state, written
-/// and read back into a fresh solver, continues alike.
+/// The solver in a run-time dimension computes what it computes in the fixed one, to
+/// round-off (its solves go by substitution where the fixed dimension's go through the
+/// inverse), on a stiff problem with a fast mode (ω = 30) and a finite-difference Jacobian;
+/// and its state, written and read back into a fresh solver, continues bit for bit.
 #[test]
-fn a_run_time_dimension_gives_the_fixed_dimension_s_results_bit_for_bit() {
+fn a_run_time_dimension_gives_the_fixed_dimension_s_results() {
     let sys = NoJacobian(SlowAndFast { fast: 30.0, slow_oscillates: false });
     let cfg = BdfConfig::new(1e-5);
     let y0 = sys.0.initial();
     let mut fixed = Bdf::new(cfg, 0.0, y0).unwrap();
     let mut dynamic = Bdf::new(cfg, 0.0, DVector::from_column_slice(y0.as_slice())).unwrap();
     let dyn_sys = AsDyn(sys);
-    for k in 1..=40 {
-        let t = 5.0 * k as f64;
+    // The first second agrees to a thousandth of the tolerance (rounding moves a step's error
+    // test now and then).
+    for k in 1..=10 {
+        let t = 0.1 * k as f64;
         fixed.advance(&dyn_sys.0, t, f64::INFINITY).unwrap();
         dynamic.advance(&dyn_sys, t, f64::INFINITY).unwrap();
-        assert_eq!(fixed.y().as_slice(), dynamic.y().as_slice(), "t = {t}");
         let (a, b) = (fixed.interpolate(t).unwrap(), dynamic.interpolate(t).unwrap());
-        assert_eq!(a.as_slice(), b.as_slice());
-        assert_eq!(fixed.stats(), dynamic.stats());
-        assert_eq!(fixed.last_step(), dynamic.last_step());
+        for (x, y) in a.iter().zip(b.iter()) {
+            assert!((x - y).abs() <= 1e-3 * (1e-5 * x.abs() + cfg.atol()), "t = {t}: {a} vs {b}");
+        }
     }
+    // Over the long run rounding moves the step sequences apart; both keep the slow motion
+    // to the tolerance's global error, with as much work to within a tenth.
+    fixed.advance(&dyn_sys.0, 200.0, f64::INFINITY).unwrap();
+    dynamic.advance(&dyn_sys, 200.0, f64::INFINITY).unwrap();
+    let (a, b) = (fixed.interpolate(200.0).unwrap(), dynamic.interpolate(200.0).unwrap());
+    assert!((a[0] - b[0]).abs() < 1e-4, "{a} vs {b}");
+    let (sf, sd) = (fixed.stats(), dynamic.stats());
+    assert!(sf.steps.abs_diff(sd.steps) * 10 <= sf.steps, "{sf:?} vs {sd:?}");
     assert!(fixed.stats().jac_evals > 1 && fixed.stats().steps > 100);
     let bytes = to_bytes(&dynamic);
-    assert_eq!(bytes, to_bytes(&fixed), "the states' bytes");
+    assert_eq!(bytes.len(), to_bytes(&fixed).len(), "the states' layouts");
     let mut restored = Bdf::new(cfg, 0.0, DVector::zeros(4)).unwrap();
     let mut reader = ByteReader { bytes: &bytes, error: None };
     restored.visit_state(&mut reader);

@@ -27,11 +27,13 @@ where
     rows: OMatrix<f64, D, D>,
     /// Row `i` of the factors is row `perm[i]` of the original matrix.
     perm: OVector<usize, D>,
-    /// The inverse A⁻¹ by rows, from the factors: [`solve`](Self::solve) is one
-    /// matrix-vector product, whose N² products are independent, where the substitutions
-    /// are a chain of N steps of dependent products (the solve sits on the Newton
-    /// iteration's chain: f, residual, solve, correction, f again). Derived from the
-    /// factors and the permutation, not part of a saved state.
+    /// The inverse A⁻¹ by rows, from the factors, for a fixed dimension: [`solve`](Self::solve)
+    /// is then one matrix-vector product, whose N² products are independent, where the
+    /// substitutions are a chain of N steps of dependent products (the solve sits on the
+    /// Newton iteration's chain: f, residual, solve, correction, f again). A run-time
+    /// dimension (many states) solves by substitution, also N² products, and spares the N³
+    /// of the inverse at every factorisation. Derived from the factors and the permutation,
+    /// not part of a saved state; empty without it.
     inverse: OMatrix<f64, D, D>,
 }
 
@@ -100,9 +102,19 @@ where
         self.rows.nrows()
     }
 
-    /// A⁻¹ by rows: column k is the substitutions' solution of A x = e_k.
+    /// Whether the solves go through the inverse: with a dimension fixed at compile time.
+    fn keeps_inverse() -> bool {
+        D::try_to_usize().is_some()
+    }
+
+    /// A⁻¹ by rows: column k is the substitutions' solution of A x = e_k; an empty matrix
+    /// where the solves do without it ([`keeps_inverse`](Self::keeps_inverse)).
     fn invert(&self) -> OMatrix<f64, D, D> {
         let (d, _) = self.rows.shape_generic();
+        if !Self::keeps_inverse() {
+            let empty = D::from_usize(0);
+            return OMatrix::<f64, D, D>::zeros_generic(empty, empty);
+        }
         let n = self.n();
         let mut inverse = OMatrix::<f64, D, D>::zeros_generic(d, d);
         let inv = inverse.as_mut_slice();
@@ -171,6 +183,7 @@ where
             self.invert()
         } else {
             let (d, _) = self.rows.shape_generic();
+            let d = if Self::keeps_inverse() { d } else { D::from_usize(0) };
             OMatrix::<f64, D, D>::zeros_generic(d, d)
         };
     }
@@ -197,6 +210,9 @@ where
 
     /// Solves `a x = b`: x = A⁻¹ b.
     pub fn solve(&self, b: &OVector<f64, D>) -> OVector<f64, D> {
+        if !Self::keeps_inverse() {
+            return self.substitute(b);
+        }
         let n = self.n();
         let inv = self.inverse.as_slice();
         OVector::<f64, D>::from_fn_generic(b.shape_generic().0, U1, |i, _| {
