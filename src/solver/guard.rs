@@ -137,7 +137,9 @@ struct Mode {
 /// The oscillatory modes of the last Jacobian.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct StabilityGuard {
-    modes: [Mode; MAX_MODES],
+    /// The slots: [`MAX_MODES`], or for a system of more equations one per complex pair it
+    /// can have ([`for_dimension`](Self::for_dimension)), so that no mode goes unwatched.
+    modes: Vec<Mode>,
     count: usize,
     /// Derived from the modes, not state: index q holds the smallest |h| at which some mode
     /// enters the unstable band of BDF_q (∞ if none can). Below it order q needs no check,
@@ -154,17 +156,22 @@ pub(crate) struct StabilityGuard {
 
 impl Default for StabilityGuard {
     fn default() -> Self {
+        Self::for_dimension(0)
+    }
+}
+
+impl StabilityGuard {
+    /// A guard for a system of `n` equations: [`MAX_MODES`] slots, or n/2 if more.
+    pub(crate) fn for_dimension(n: usize) -> Self {
         Self {
-            modes: [Mode::default(); MAX_MODES],
+            modes: vec![Mode::default(); MAX_MODES.max(n / 2)],
             count: 0,
             unsafe_from: [f64::INFINITY; 6],
             pending: false,
             refined: false,
         }
     }
-}
 
-impl StabilityGuard {
     /// Takes a new Jacobian `jac` (at Jacobian evaluations only, not every step). Its modes
     /// are computed only when a step could reach the unstable band of one of them: every
     /// eigenvalue has |λ| ≤ ρ̄, so a step with h·ρ̄ below BDF3's lower band edge needs none.
@@ -223,7 +230,7 @@ impl StabilityGuard {
             return;
         };
         for &(re, im) in eigenvalues.iter() {
-            if im <= 0.0 || self.count == MAX_MODES {
+            if im <= 0.0 || self.count == self.modes.len() {
                 continue;
             }
             let angle_deg = math::atan2(im, -re).to_degrees();
@@ -238,7 +245,7 @@ impl StabilityGuard {
     fn derive_bounds(&mut self) {
         for (q, bound) in self.unsafe_from.iter_mut().enumerate() {
             *bound = match unstable_band(q) {
-                Some((lo, _)) => self.modes[..self.count.min(MAX_MODES)]
+                Some((lo, _)) => self.modes[..self.count.min(self.modes.len())]
                     .iter()
                     .filter(|m| m.angle_deg > A_STABILITY_ANGLE_DEG[q])
                     .map(|m| lo / m.modulus)
@@ -261,14 +268,14 @@ impl StabilityGuard {
     }
 
     /// What [`update`](Self::update) stores: finite moduli ≥ 0, angles in
-    /// [0, `MAX_ANGLE_DEG`], at most `MAX_MODES` modes. Unused slots hold zeros or earlier
+    /// [0, `MAX_ANGLE_DEG`], at most one per slot. Unused slots hold zeros or earlier
     /// modes, which satisfy the same bounds.
     pub(crate) fn check(&self) -> Result<(), SolverError> {
         for m in &self.modes {
             require(m.modulus.is_finite() && m.modulus >= 0.0, "guard.modulus")?;
             require((0.0..=MAX_ANGLE_DEG).contains(&m.angle_deg), "guard.angle")?;
         }
-        require(self.count <= MAX_MODES, "guard.count")
+        require(self.count <= self.modes.len(), "guard.count")
     }
 
     /// Forgets the stored modes (the guard then allows any order).

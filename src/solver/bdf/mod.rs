@@ -232,7 +232,7 @@ where
             rate: 1.0,
             steps_at_lu: 0,
             steps_at_jac: 0,
-            guard: StabilityGuard::default(),
+            guard: StabilityGuard::for_dimension(d.value()),
             started: false,
             landing: None,
             stats: Stats::default(),

@@ -27,7 +27,8 @@ where
     ///    and the permutation are still visited: a writer gives zeros and the identity, and
     ///    a reader's values are discarded (reported through [`StateVisitor::discarded`]).
     /// 4. `gamma`; `gamma_lu`; `rate`; `steps_at_lu` (count); `steps_at_jac` (count);
-    ///    `guard.modulus`, `guard.angle` for each of 8 slots; `guard.count` (count).
+    ///    `guard.modulus`, `guard.angle` for each of the guard's slots (8, or N/2 for N > 16);
+    ///    `guard.count` (count).
     /// 5. `started` (flag); `landing` (flag), `landing` (real, 0 when the flag is false,
     ///    and then discarded on reading, through [`StateVisitor::discarded`]).
     /// 6. The [`Stats`] counters in declaration order, named `stats.steps` … `stats.restarts`.
