@@ -268,6 +268,12 @@ fn bad_study_files_name_the_field() {
         ("[set]\nt_end = 1\nt_end = 2", "line 3, column 1: not valid TOML"),
         ("[set]\nt_end = \"5\"", "`set.t_end`: `t_end` = \"5\": must be a number"),
         ("[parameters.M2]\nvalues = [6, -1]", "`parameters.M2.values[1]`"),
+        ("[set]\nn_elements = 33", "`n_elements` = 33 is out of range: must be an integer in 1..=32"),
+        ("[set]\nn_elements = 0", "`n_elements` = 0 is out of range"),
+        ("[set]\ndamping_beta = -1e-4", "`damping_beta` = -0.0001 is out of range: must be non-negative"),
+        ("[parameters.n_elements]\nvalues = [1, 2, 40]", "`parameters.n_elements.values[2]`"),
+        ("[parameters.n_elements]\nvalues = [1, 2.5]", "`n_elements` = 2.5: must be an integer"),
+        ("[parameters.damping_ratio]\nvalues = [0.01, -0.02]", "`parameters.damping_ratio.values[1]`"),
         ("[parameters.M2]\nstart = 6\nstop = 9\ncount = 1", "`parameters.M2.stop` = 9"),
         ("[parameters.M2]\nstart = 6\nstop = 6\ncount = 3", "must differ from start"),
         ("metrics = \"peak_M\"", "must be a list of metric names: residual_v1"),
@@ -325,4 +331,24 @@ fn the_parameters_a_study_takes_are_the_settings_table_s() {
     let names: Vec<&str> = variables().map(|s| s.name).collect();
     let marked: Vec<&str> = SETTINGS.iter().filter(|s| s.appears.study).map(|s| s.name).collect();
     assert_eq!(names, marked);
+}
+
+/// The number of elements and the damping are study parameters like the others: a grid over
+/// n_elements runs each case with its beam (one element is the paper's model), and damping
+/// lowers the residual vibration.
+#[test]
+fn a_study_varies_the_number_of_elements_and_the_damping() {
+    let study = parse(
+        "metrics = [\"residual_v1\"]\n[set]\nt_end = 3.0\ndt_out = 0.01\n\
+         [parameters.n_elements]\nvalues = [1, 2]\n[parameters.damping_ratio]\nvalues = [0, 0.05]\n",
+    )
+    .unwrap();
+    assert_eq!(study.cases(), 4);
+    let rows: Vec<_> = (0..4).map(|c| study.run_case(c)).collect();
+    for r in &rows {
+        assert_eq!(r.status, Status::Ok, "{}", r.message);
+    }
+    let residual = |c: usize| rows[c].metrics[0];
+    assert_ne!(residual(0), residual(2), "one and two elements differ");
+    assert!(residual(1) < residual(0) && residual(3) < residual(2), "damping lowers it");
 }

@@ -302,6 +302,9 @@ fn out_of_range_parameters_are_refused_and_leave_values_unchanged() {
         (Var::TRot, -1.0, "positive"),
         (Var::Atol, -1e-6, "non-negative"),
         (Var::FixedStep, -0.01, "non-negative"),
+        (Var::DampingAlpha, -0.1, "non-negative"),
+        (Var::DampingBeta, -1e-4, "non-negative"),
+        (Var::DampingRatio, -0.02, "non-negative"),
     ];
     for &(var, x, allowed) in refused {
         let s = h.set_real(var, x);
@@ -318,6 +321,8 @@ fn out_of_range_parameters_are_refused_and_leave_values_unchanged() {
         (Var::FixedOrder, 6, "0..=5"),
         (Var::PhiExtrapolation, -1, "0..=3"),
         (Var::PhiExtrapolation, 4, "0..=3"),
+        (Var::NElements, 0, "1..=32"),
+        (Var::NElements, 33, "1..=32"),
     ];
     for &(var, k, allowed) in int_refused {
         let s = h.set_integer(var, k);
