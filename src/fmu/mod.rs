@@ -289,6 +289,20 @@ impl fmi::Model for BeamBodyFmu {
                 Some(self.build_run(&at.setup).map_err(|e| format!("the saved parameters: {e}"))?);
         }
         let run = self.run.as_mut().expect("built above");
+        // The integrator's size, which the saved parameters fix (n_elements, formulation): a
+        // state whose parameters were changed after it was written is refused here, before
+        // its integrator's fields are read out of place.
+        let states = run.dimension() as u64;
+        let mut saved = states;
+        v.count("run.states", &mut saved);
+        if saved != states {
+            let p = &self.values.settings;
+            return Err(format!(
+                "field `run.states` = {saved}: the saved parameters (n_elements = {}, \
+                 formulation = {}) make an integrator of {states} states",
+                p.params.n_elements, p.formulation
+            ));
+        }
         run.visit_state(v);
         run.check_state()?;
         // After every step, successful or not, the communication time and the integrator's

@@ -241,6 +241,16 @@ impl Run {
         }
     }
 
+    /// The number of the integrator's states: 4 or 6 for the paper's model, 4n or 4n + 2
+    /// for n elements.
+    pub fn dimension(&self) -> usize {
+        match &self.bdf {
+            Integrator::TwoDof(_) => 4,
+            Integrator::Dae(_) => 6,
+            Integrator::Elements(b) => b.dimension(),
+        }
+    }
+
     /// The piece of φ in use.
     pub fn piece(&self) -> PhiPiece {
         self.piece

@@ -349,3 +349,44 @@ fn fuzz_regressions_of_the_deserializer_are_refused_with_their_reason() {
     }
     assert_eq!(seen, expected.len());
 }
+
+/// A state carries its number of elements: restored into an instance set up with another n it
+/// brings its own back and continues bit for bit; with its n_elements field changed (and the
+/// frame resealed) the integrator's data no longer fit, and the state is refused, naming the
+/// field.
+#[test]
+fn a_state_carries_its_number_of_elements() {
+    let _g = shared();
+    let a = Host::new("n = 3");
+    a.expect_ok(a.set_integer(Var::PhiSource, 2));
+    a.expect_ok(a.set_integer(Var::NElements, 3));
+    a.initialize();
+    let t = a.steps(0.0, 0.01, 20);
+    let mut s: fmi2FMUstate = null_mut();
+    a.expect_ok(a.get_state(&mut s));
+    let bytes = a.serialize(s);
+    a.expect_ok(a.free_state(&mut s));
+
+    let b = Host::new("n = 5");
+    b.expect_ok(b.set_integer(Var::PhiSource, 2));
+    b.expect_ok(b.set_integer(Var::NElements, 5));
+    b.initialize();
+    let mut p: fmi2FMUstate = null_mut();
+    b.expect_ok(b.deserialize(&bytes, &mut p));
+    b.expect_ok(b.set_state(p));
+    let (ta, tb) = (a.steps(t, 0.01, 10), b.steps(t, 0.01, 10));
+    assert_eq!(ta, tb);
+    assert_eq!(a.outputs(), b.outputs(), "n = 3 restored into the n = 5 instance");
+    b.expect_ok(b.free_state(&mut p));
+
+    let n_at = field_at("n_elements");
+    for other in [1u64, 2, 4] {
+        let mut bad = bytes.clone();
+        bad[n_at..n_at + 8].copy_from_slice(&other.to_le_bytes());
+        beam_body::fmi::reseal_checksum(&mut bad);
+        let mut q: fmi2FMUstate = null_mut();
+        let st = b.deserialize(&bad, &mut q);
+        b.expect_error(st, &["fmi2DeSerializeFMUstate", "run.states", "n_elements"]);
+        assert!(q.is_null());
+    }
+}
