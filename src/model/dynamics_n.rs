@@ -272,8 +272,21 @@ impl BeamBodyN {
         DVector::from_vec(self.assemble(&held, q.as_slice(), &zero).f)
     }
 
-    /// The tangent stiffness −∂F/∂q at rest, by central differences.
-    fn tangent_stiffness(&self, phi_fixed: f64, q: &DVector<f64>) -> DMatrix<f64> {
+    /// The linear equations' accelerations at rest at a held φ: zero where their force is.
+    fn linear_at_rest(&self, phi_fixed: f64, q: &DVector<f64>) -> DVector<f64> {
+        let held = Phi { phi: phi_fixed, ..Phi::default() };
+        let zero = vec![0.0; q.len()];
+        let mut acc = vec![0.0; q.len()];
+        self.linear(&held, q.as_slice(), &zero, &mut acc);
+        DVector::from_vec(acc)
+    }
+
+    /// −∂r/∂q of a residual r at q, by central differences (for r = F(q) at rest: the
+    /// tangent stiffness).
+    fn negative_jacobian(
+        r: impl Fn(&DVector<f64>) -> DVector<f64>,
+        q: &DVector<f64>,
+    ) -> DMatrix<f64> {
         let n = q.len();
         let mut kt = DMatrix::zeros(n, n);
         for j in 0..n {
@@ -281,24 +294,23 @@ impl BeamBodyN {
             let (mut plus, mut minus) = (q.clone(), q.clone());
             plus[j] += e;
             minus[j] -= e;
-            let column = -(self.force_at_rest(phi_fixed, &plus)
-                - self.force_at_rest(phi_fixed, &minus))
-                / (2.0 * e);
-            kt.set_column(j, &column);
+            kt.set_column(j, &(-(r(&plus) - r(&minus)) / (2.0 * e)));
         }
         kt
     }
 
-    /// The static equilibrium q at a held φ, F(q, 0) = 0, by Newton's method from the
-    /// straight beam, to a step of 1e-11 of the coordinates (the tangent stiffness by
-    /// differences of a beam of many elements limits it); `None` if it does not converge.
-    pub fn equilibrium(&self, phi_fixed: f64) -> Option<DVector<f64>> {
+    /// The tangent stiffness −∂F/∂q at rest.
+    fn tangent_stiffness(&self, phi_fixed: f64, q: &DVector<f64>) -> DMatrix<f64> {
+        Self::negative_jacobian(|q| self.force_at_rest(phi_fixed, q), q)
+    }
+
+    /// The q where `r` vanishes, by Newton's method from the straight beam, to a step of 1e-11
+    /// of the coordinates (the Jacobian by differences of a beam of many elements limits it);
+    /// `None` if it does not converge.
+    fn rest(&self, r: impl Fn(&DVector<f64>) -> DVector<f64>) -> Option<DVector<f64>> {
         let mut q = DVector::zeros(self.dofs());
         for _ in 0..50 {
-            let dq = self
-                .tangent_stiffness(phi_fixed, &q)
-                .lu()
-                .solve(&self.force_at_rest(phi_fixed, &q))?;
+            let dq = Self::negative_jacobian(&r, &q).lu().solve(&r(&q))?;
             q += &dq;
             if !q.iter().all(|x| x.is_finite()) {
                 return None;
@@ -308,6 +320,16 @@ impl BeamBodyN {
             }
         }
         None
+    }
+
+    /// The static equilibrium q at a held φ, F(q, 0) = 0 (of the linear equations with
+    /// `linear`).
+    pub fn equilibrium(&self, phi_fixed: f64, linear: bool) -> Option<DVector<f64>> {
+        if linear {
+            self.rest(|q| self.linear_at_rest(phi_fixed, q))
+        } else {
+            self.rest(|q| self.force_at_rest(phi_fixed, q))
+        }
     }
 
     /// Squared angular frequencies ω² [rad²/s²], ascending, of the small oscillations about
@@ -321,7 +343,7 @@ impl BeamBodyN {
     /// [`modes`](Self::modes) with the shapes: column k is mode k, normalised to unit modal
     /// mass (φ_kᵀMφ_k = 1).
     fn mode_shapes(&self, phi_fixed: f64) -> Option<(DVector<f64>, Vec<f64>, DMatrix<f64>)> {
-        let q = self.equilibrium(phi_fixed)?;
+        let q = self.equilibrium(phi_fixed, false)?;
         let held = Phi { phi: phi_fixed, ..Phi::default() };
         let zero = vec![0.0; q.len()];
         let Assembled { b, a, .. } = self.assemble(&held, q.as_slice(), &zero);
@@ -482,6 +504,25 @@ mod tests {
         let many = BeamBodyN::new(Params { n_elements: 32, ..p }).unwrap();
         let (q, w2) = many.modes(std::f64::consts::FRAC_PI_2).expect("an equilibrium at pi/2");
         assert!(q[62] < -0.14 && w2[0] > 0.0, "{} {w2:?}", q[62]);
+    }
+
+    /// The static equilibria of one element are the paper's model's, of the reduced and of the
+    /// linear equations (residual_v1 of a study is measured from them); with more elements
+    /// they move by the elements' error.
+    #[test]
+    fn equilibria_of_one_element_are_the_paper_s() {
+        let p = Params::default();
+        let paper = BeamBody::new(p).unwrap();
+        for linear in [false, true] {
+            for phi in [0.4, std::f64::consts::FRAC_PI_2, 2.5] {
+                let q = BeamBodyN::new(p).unwrap().equilibrium(phi, linear).unwrap();
+                let (v, th) = paper.equilibrium(phi, linear).unwrap();
+                assert!((q[0] - v).abs() < 1e-10 && (q[1] - th).abs() < 1e-10, "{linear} {phi}");
+                let four = BeamBodyN::new(Params { n_elements: 4, ..p }).unwrap();
+                let q4 = four.equilibrium(phi, linear).unwrap();
+                assert!((q4[6] - v).abs() < 1e-3 * v.abs() && q4[6] != v, "{linear} {phi}");
+            }
+        }
     }
 
     #[test]

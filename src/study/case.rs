@@ -9,6 +9,7 @@ pub(super) struct Accumulator {
     /// `None` until the first output time at or after t_rot.
     residual: Option<f64>,
     peak_m: f64,
+    peak_m_root: f64,
     peak_n: f64,
     peak_p: f64,
     max_v1: f64,
@@ -23,6 +24,7 @@ impl Accumulator {
             t_rot,
             residual: None,
             peak_m: 0.0,
+            peak_m_root: 0.0,
             peak_n: 0.0,
             peak_p: 0.0,
             max_v1: 0.0,
@@ -36,6 +38,7 @@ impl Accumulator {
         let max = |acc: f64, x: f64| if x.is_nan() || acc.is_nan() { f64::NAN } else { acc.max(x) };
         let r = &o.reactions;
         self.peak_m = max(self.peak_m, r.m.abs());
+        self.peak_m_root = max(self.peak_m_root, o.root.1.abs());
         self.peak_n = max(self.peak_n, r.n.abs());
         self.peak_p = max(self.peak_p, r.p.abs());
         self.max_v1 = max(self.max_v1, o.v1.abs());
@@ -51,6 +54,7 @@ impl Accumulator {
         match m {
             Metric::ResidualV1 => self.residual.unwrap_or(f64::NAN),
             Metric::PeakM => self.peak_m,
+            Metric::PeakMRoot => self.peak_m_root,
             Metric::PeakN => self.peak_n,
             Metric::PeakP => self.peak_p,
             Metric::MaxV1 => self.max_v1,
@@ -111,8 +115,18 @@ impl Study {
                 return row;
             }
             let linear = scene.formulation == Formulation::Linear;
-            match BeamBody::new(scene.params).map(|m| m.equilibrium(scene.law.phi_end, linear)) {
-                Ok(Some((v1, _))) => v1,
+            let equilibrium = if scene.params.is_paper_model() {
+                BeamBody::new(scene.params)
+                    .map_err(|e| e.to_string())
+                    .map(|m| m.equilibrium(scene.law.phi_end, linear).map(|(v1, _)| v1))
+            } else {
+                BeamBodyN::new(scene.params).map(|m| {
+                    let tip = m.beam.tip();
+                    m.equilibrium(scene.law.phi_end, linear).map(|q| q[tip])
+                })
+            };
+            match equilibrium {
+                Ok(Some(v1)) => v1,
                 Ok(None) => {
                     row.status = Status::Failed;
                     row.message = format!(
@@ -123,7 +137,7 @@ impl Study {
                     return row;
                 }
                 Err(e) => {
-                    row.message = e.to_string();
+                    row.message = e;
                     return row;
                 }
             }

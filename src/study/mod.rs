@@ -19,7 +19,7 @@ pub use axis::{Axis, Distribution};
 pub use runner::run_cases;
 pub use sample::{normal_cdf, normal_quantile};
 
-use crate::model::{BeamBody, Formulation, Outputs};
+use crate::model::{BeamBody, BeamBodyN, Formulation, Outputs};
 use crate::scene::locate;
 use crate::settings::{Setting, SETTINGS};
 use crate::sim::{simulate_partial, Scene, SimError};
@@ -42,6 +42,8 @@ pub enum Metric {
     ResidualV1,
     /// max |M| [N·m], the hinge moment.
     PeakM,
+    /// max |M_root| [N·m], the bending moment at the clamp.
+    PeakMRoot,
     /// max |N| [N], the hinge force along x.
     PeakN,
     /// max |P| [N], the hinge force along y.
@@ -55,9 +57,10 @@ pub enum Metric {
 }
 
 impl Metric {
-    pub const ALL: [Metric; 7] = [
+    pub const ALL: [Metric; 8] = [
         Metric::ResidualV1,
         Metric::PeakM,
+        Metric::PeakMRoot,
         Metric::PeakN,
         Metric::PeakP,
         Metric::MaxV1,
@@ -70,6 +73,7 @@ impl Metric {
         match self {
             Metric::ResidualV1 => "residual_v1",
             Metric::PeakM => "peak_M",
+            Metric::PeakMRoot => "peak_M_root",
             Metric::PeakN => "peak_N",
             Metric::PeakP => "peak_P",
             Metric::MaxV1 => "max_v1",
@@ -82,7 +86,7 @@ impl Metric {
     pub fn unit(self) -> &'static str {
         match self {
             Metric::ResidualV1 | Metric::MaxV1 => "m",
-            Metric::PeakM => "N.m",
+            Metric::PeakM | Metric::PeakMRoot => "N.m",
             Metric::PeakN | Metric::PeakP => "N",
             Metric::MaxTheta1 => "rad",
             Metric::EnergyFinal => "J",

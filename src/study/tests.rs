@@ -339,7 +339,7 @@ fn the_parameters_a_study_takes_are_the_settings_table_s() {
 #[test]
 fn a_study_varies_the_number_of_elements_and_the_damping() {
     let study = parse(
-        "metrics = [\"residual_v1\"]\n[set]\nt_end = 3.0\ndt_out = 0.01\n\
+        "metrics = [\"residual_v1\", \"peak_M_root\"]\n[set]\nt_end = 3.0\ndt_out = 0.01\n\
          [parameters.n_elements]\nvalues = [1, 2]\n[parameters.damping_ratio]\nvalues = [0, 0.05]\n",
     )
     .unwrap();
@@ -350,5 +350,9 @@ fn a_study_varies_the_number_of_elements_and_the_damping() {
     }
     let residual = |c: usize| rows[c].metrics[0];
     assert_ne!(residual(0), residual(2), "one and two elements differ");
+    for r in &rows {
+        let m_root = r.metrics[1].unwrap();
+        assert!(m_root > 50.0 && m_root < 1e3, "peak_M_root {m_root}");
+    }
     assert!(residual(1) < residual(0) && residual(3) < residual(2), "damping lowers it");
 }
