@@ -90,8 +90,9 @@ pub struct Scene {
     pub dt_out: f64,
     /// Most output rows (and communication steps of an emulated host) a run may have.
     pub max_rows: u64,
-    /// `columns = beam`: the CLI's CSV has the beam's columns too.
-    pub beam_columns: bool,
+    /// The CLI's CSV columns, the item of `columns`: 0 paper, 1 beam (the beam's columns
+    /// too), 2 shape (and the nodes' coordinates).
+    pub columns: usize,
 }
 
 impl Default for Scene {
@@ -119,7 +120,7 @@ impl Default for Scene {
             t_end: 10.0,
             dt_out: 0.01,
             max_rows: 1,
-            beam_columns: false,
+            columns: 0,
         };
         for s in &SETTINGS {
             scene.put(s.key, s.default);
@@ -177,7 +178,7 @@ impl Scene {
             Key::TEnd => Real(self.t_end),
             Key::DtOut => Real(self.dt_out),
             Key::MaxRows => Integer(self.max_rows as i64),
-            Key::Columns => Choice(usize::from(self.beam_columns)),
+            Key::Columns => Choice(self.columns),
         }
     }
 
@@ -265,7 +266,7 @@ impl Scene {
             Key::TEnd => self.t_end = real(value),
             Key::DtOut => self.dt_out = real(value),
             Key::MaxRows => self.max_rows = int(value),
-            Key::Columns => self.beam_columns = choice(value) == 1,
+            Key::Columns => self.columns = choice(value),
         }
     }
 

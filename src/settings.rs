@@ -91,6 +91,11 @@ pub const COLUMNS_TYPE: EnumType = EnumType {
             "those, then the root's bending moment and shear force and the deflection at l/4, \
              l/2, 3l/4",
         ),
+        (
+            "shape",
+            "those, then every node's deflection and slope, v_k and theta_k at x = k*l/n, k = \
+             1..n (node n is the tip)",
+        ),
     ],
 };
 
@@ -603,8 +608,9 @@ pub const SETTINGS: [Setting; 35] = [
         Kind::Choice(&COLUMNS_TYPE),
         Finite,
         Choice(0),
-        "Columns of a CLI run's CSV: paper (the default), or beam (and the loads at the root \
-         and the deflection at the quarter points; the FMU has them as outputs)",
+        "Columns of a CLI run's CSV: paper (the default), beam (and the loads at the root and \
+         the deflection at the quarter points; the FMU has them as outputs), or shape (and \
+         the nodes' deflections and slopes, for pictures)",
         flag(false, "--columns"),
     ),
 ];

@@ -1,4 +1,4 @@
-"""The command line: `beam-body-study run|plot ...` or `python -m beam_body_study run|plot ...`
+"""The command line: `beam-body-study run|plot|animate ...` or `python -m beam_body_study run|plot ...`
 (see the package's docstring).
 
 Every error a user can make ends as one line, `error: ...`, with exit status 2; Ctrl-C as one
@@ -109,7 +109,27 @@ def parser() -> argparse.ArgumentParser:
     hist.add_argument("--bins", type=int, default=60)
     hist.add_argument("--title")
     hist.add_argument("-o", "--output", required=True, help="the picture (.png, .pdf, .svg, ...)")
+    anim = sub.add_parser("animate", help="the beam and the body through a run, as a GIF")
+    anim.add_argument("scene", help="the scene file (TOML), as `beam-body simulate` reads it")
+    anim.add_argument("-o", "--output", required=True, help="the animation (.gif)")
+    anim.add_argument("--elements", type=int, help="n_elements (default: the scene's)")
+    anim.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                      help="a setting on top of the scene (repeatable), as the CLI's --set")
+    anim.add_argument("--fps", type=float, default=20.0,
+                      help="frames per second of simulated time, and of the GIF (default 20)")
+    anim.add_argument("--dpi", type=int, default=72, help="resolution (default 72)")
+    anim.add_argument("--cli", help="the beam-body binary (default: $BEAM_BODY_BIN, "
+                                    "target/release/beam-body, or beam-body on PATH)")
     return ap
+
+
+def animate_command(args) -> None:
+    from .animate import animate
+
+    info = animate(args.cli or default_cli(), args.scene, args.output, args.set,
+                   elements=args.elements, fps=args.fps, dpi=args.dpi)
+    print(f"animate: {info['frames']} frames of {info['elements']} element(s); "
+          f"wrote {args.output}", file=sys.stderr)
 
 
 def run_command(args) -> None:
@@ -145,6 +165,8 @@ def main(argv=None) -> int:
     try:
         if args.command == "run":
             run_command(args)
+        elif args.command == "animate":
+            animate_command(args)
         else:
             plot_command(args)
     except Interrupted as e:

@@ -57,7 +57,7 @@ pub struct Report {
 
 /// Runs the scene, calling `sink` with the outputs at every output time.
 pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Report, SimError> {
-    let (report, result) = simulate_partial(scene, |o| {
+    let (report, result) = simulate_partial(scene, |o, _| {
         sink(o);
         ControlFlow::Continue(())
     });
@@ -67,10 +67,11 @@ pub fn simulate(scene: &Scene, mut sink: impl FnMut(&Outputs)) -> Result<Report,
 /// [`simulate`], which also reports a failed run: the counters up to the failure, and the
 /// warning if one came first. A run that fails before its first step has zero counters.
 /// `sink` may end the run at once with [`ControlFlow::Break`] (a closed output), which
-/// fails it with [`SimError::Stopped`].
+/// fails it with [`SimError::Stopped`]; it gets the run too, for what the outputs do not hold
+/// (the nodes' coordinates: [`Run::coordinates_at`]).
 pub fn simulate_partial(
     scene: &Scene,
-    mut sink: impl FnMut(&Outputs) -> ControlFlow<()>,
+    mut sink: impl FnMut(&Outputs, &Run) -> ControlFlow<()>,
 ) -> (Report, Result<(), SimError>) {
     let mut run = match start(scene) {
         Ok(run) => run,
@@ -81,7 +82,7 @@ pub fn simulate_partial(
         if let Some(w) = run.take_warning() {
             warning = Some(w);
         }
-        match sink(&run.outputs_at(t)?) {
+        match sink(&run.outputs_at(t)?, run) {
             ControlFlow::Continue(()) => Ok(()),
             ControlFlow::Break(()) => Err(SimError::Stopped),
         }

@@ -479,7 +479,8 @@ impl Run {
 
     /// The state at `t` inside the last step (dense output) into `out`: (v1, ϑ1, v̇1, ϑ̇1),
     /// or (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2) for the DAE formulations (projected when stabilised, as
-    /// the outputs are). Returns the number of states written. Cheaper than
+    /// the outputs are); for n elements, the tip's four in any formulation. Returns the number
+    /// of states written. Cheaper than
     /// [`outputs_at`](Self::outputs_at), which also computes accelerations, reactions and
     /// energy; the benchmark records this, as the other solvers record their states.
     pub fn state_at(&self, t: f64, out: &mut [f64; 6]) -> Result<usize, SolverError> {
@@ -502,6 +503,21 @@ impl Run {
                 Ok(4)
             }
         }
+    }
+
+    /// The coordinates q at `t` inside the last step (dense output) into `out`: every node's
+    /// (v_k, ϑ_k), k = 1..n, the tip last; (v1, ϑ1) for the paper's model.
+    pub fn coordinates_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
+        out.clear();
+        match &self.bdf {
+            Integrator::TwoDof(b) => out.extend_from_slice(&b.interpolate(t)?.as_slice()[..2]),
+            Integrator::Dae(b) => out.extend_from_slice(&b.interpolate(t)?.as_slice()[..2]),
+            Integrator::Elements(b) => {
+                let n = self.elements().map_or(1, |m| m.dofs());
+                out.extend_from_slice(&b.interpolate(t)?.as_slice()[..n]);
+            }
+        }
+        Ok(())
     }
 
     /// Visits the run's state: the piece of φ in use, the host's signal and the integrator

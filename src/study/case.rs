@@ -145,7 +145,7 @@ impl Study {
             0.0 // unused; an invalid model is reported by the run
         };
         let mut acc = Accumulator::new(v1_eq, scene.law.t_rot);
-        let (report, result) = simulate_partial(&scene, |o| {
+        let (report, result) = simulate_partial(&scene, |o, _| {
             acc.add(o);
             std::ops::ControlFlow::Continue(())
         });

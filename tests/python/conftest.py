@@ -64,7 +64,8 @@ BEAM_UNITS = "N.m,N,m,m,m".split(",")
 
 def read_csv(text: str) -> dict:
     """The CLI's CSV output as {column name without its unit: numpy array}; checks the header: the
-    paper's columns, and the beam's after them (`--columns beam`) if present."""
+    paper's columns, and the beam's after them (`--columns beam`) if present, then the nodes'
+    (`--columns shape`: v_k, theta_k)."""
     import csv
     import io
 
@@ -76,7 +77,13 @@ def read_csv(text: str) -> dict:
     columns = COLUMNS
     if len(header) > len(HEADER):
         columns = COLUMNS + BEAM_COLUMNS
-        assert header == HEADER + [f"{c} [{u}]" for c, u in zip(BEAM_COLUMNS, BEAM_UNITS)], header
+        beam = HEADER + [f"{c} [{u}]" for c, u in zip(BEAM_COLUMNS, BEAM_UNITS)]
+        assert header[:len(beam)] == beam, header
+        nodes = header[len(beam):]
+        assert len(nodes) % 2 == 0, header
+        for k in range(len(nodes) // 2):
+            assert nodes[2 * k:2 * k + 2] == [f"v_{k + 1} [m]", f"theta_{k + 1} [rad]"], header
+            columns = columns + [f"v_{k + 1}", f"theta_{k + 1}"]
     else:
         assert header == HEADER, f"CSV header {header} != {HEADER}"
     data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)

@@ -38,13 +38,19 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         None => stdout_failed(e),
         Some(path) => Failure::Usage(format!("writing {path} failed: {e}")),
     };
-    let beam = scene.beam_columns;
+    let (beam, shape) = (scene.columns >= 1, scene.columns == 2);
     let extra = if beam { &Outputs::BEAM_COLUMNS[..] } else { &[] };
-    let header: Vec<String> = Outputs::COLUMNS
+    let mut header: Vec<String> = Outputs::COLUMNS
         .iter()
         .chain(extra)
         .map(|(name, unit)| csv::header(name, Some(unit)))
         .collect();
+    if shape {
+        for k in 1..=scene.params.n_elements {
+            header.push(csv::header(&format!("v_{k}"), Some("m")));
+            header.push(csv::header(&format!("theta_{k}"), Some("rad")));
+        }
+    }
     writeln!(out, "{}", header.join(",")).map_err(|e| failed(e, &cli.output))?;
 
     let mut io_error = None;
@@ -52,7 +58,8 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
     let (mut written, mut max_drift) = (0u64, 0.0f64);
     let (mut e_min, mut e_max) = (f64::INFINITY, f64::NEG_INFINITY);
     let start = Instant::now();
-    let (report, result) = simulate_partial(&scene, |o| {
+    let (mut nodes, n_nodes) = (Vec::new(), scene.params.n_elements);
+    let (report, result) = simulate_partial(&scene, |o, run| {
         line.clear();
         for (k, v) in o.values().iter().enumerate() {
             if k > 0 {
@@ -64,6 +71,17 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
             for v in o.beam_values() {
                 line.push(',');
                 csv::push_number(&mut line, v);
+            }
+        }
+        if shape {
+            // The output times lie in the last step: its dense output holds them.
+            // (outputs_at just interpolated at o.t: this cannot fail.)
+            if run.coordinates_at(o.t, &mut nodes).is_err() {
+                nodes.resize(2 * n_nodes, f64::NAN);
+            }
+            for v in &nodes {
+                line.push(',');
+                csv::push_number(&mut line, *v);
             }
         }
         line.push('\n');

@@ -229,6 +229,25 @@ def test_beam_columns_are_added_after_the_paper_s_and_change_nothing_else(beam_b
         assert max(abs(cubic - rows[name])) <= 1e-15 * max(abs(rows["v1"])) + 1e-300
 
 
+def test_shape_columns_hold_every_node_and_the_last_is_the_tip(beam_body):
+    """`--columns shape` appends v_k, theta_k for the nodes k = 1..n after the beam's columns;
+    node n is the tip (v1, theta1), and with an elements' shape of 4 elements the middle node
+    (k = 2) is the beam's deflection at l/2 (the column v_mid)."""
+    args = ["simulate", str(REPO / "scenes" / "paper.toml"), "--set", "t_end=0.6", "--set", "dt_out=0.1"]
+    beam = read_csv(run_cli(beam_body, args + ["--elements", "4", "--columns", "beam"]))
+    text = run_cli(beam_body, args + ["--elements", "4", "--columns", "shape"])
+    header = text.splitlines()[0].split(",")
+    assert header[20:] == [f"{v}_{k} [{u}]" for k in range(1, 5) for v, u in (("v", "m"), ("theta", "rad"))]
+    shape = read_csv(text)
+    for name in beam:
+        assert (shape[name] == beam[name]).all(), name
+    assert (shape["v_4"] == shape["v1"]).all() and (shape["theta_4"] == shape["theta1"]).all()
+    assert (shape["v_2"] == shape["v_mid"]).all()
+    assert max(abs(shape["v_1"])) > 0.01 * max(abs(shape["v1"]))
+    one = read_csv(run_cli(beam_body, args + ["--columns", "shape"]))
+    assert (one["v_1"] == one["v1"]).all() and (one["theta_1"] == one["theta1"]).all()
+
+
 @pytest.mark.parametrize("value", ["0", "33", "2.5"])
 def test_an_element_count_out_of_range_is_refused_naming_the_setting(beam_body, value):
     r = subprocess.run([str(beam_body), "simulate", str(REPO / "scenes" / "paper.toml"), "--elements", value],
