@@ -100,6 +100,15 @@ Commands:
           The study tool (python/beam_body_study, README: Design studies) with the
           release CLI, in target/venv: `study run STUDY.toml -o OUT.parquet [--engine
           dask [--scheduler ADDRESS]]`, `study plot heatmap|hist ...`, `study --help`.
+  model-error [--quick]
+          The model's error against run time (python/beam_body_study/model_error.py):
+          the quadratic model in n = 1, 2, 4, 8, 16 elements at rtol 1e-4, 1e-6, 1e-8
+          against n = 32 at 1e-8 on four scenes (the paper's, phi_end = 0.3, M2 = 1 kg,
+          t_rot = 3 s); model, integration and total errors of v1, theta1 and the
+          metrics; run times; the fast turn's perturbation growth. Writes
+          docs/model_error.{md,png} (runs cached in target/model_error/runs/; about an
+          hour on 2 cores from scratch). --quick: 2 s of two scenes, n = 1, 2 against
+          n = 4, into target/model_error/ (the test suite's smoke test).
   bench-study [--quick]
           Throughput of the study runners side by side (bench/python/bench_study.py):
           a 10^4-case study through the native runner on 1 and 2 threads, the chunked
@@ -161,6 +170,7 @@ fn run(args: &[String]) -> Result {
         },
         "fuzz" => xtask::fuzz::run(options),
         "study" => study::run(options),
+        "model-error" => study::model_error(options),
         // The benchmarks and experiments live in their own crate (bench/); these run it.
         "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-study" | "sweep"
         | "sweep-case" | "figures" | "profile" => xtask::bench(command, options),

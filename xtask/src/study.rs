@@ -14,17 +14,32 @@ pub fn run(args: &[String]) -> Result {
                     (cargo xtask study run examples/turn_map.toml -o target/study/turn_map.parquet)"
             .into());
     }
+    module("beam_body_study", args, "the study tool")
+}
+
+/// `cargo xtask model-error [--quick]`: the model's error against run time
+/// (python/beam_body_study/model_error.py); the full run writes docs/model_error.{md,png}.
+pub fn model_error(args: &[String]) -> Result {
+    let mut args = args.to_vec();
+    if !args.iter().any(|a| a == "--quick" || a == "--docs" || a == "-h" || a == "--help") {
+        args.extend(["--docs".into(), project_root().join("docs").display().to_string()]);
+    }
+    module("beam_body_study.model_error", &args, "model-error")
+}
+
+/// `python -m MODULE ARGS` in target/venv with the release CLI.
+fn module(module: &str, args: &[String], what: &str) -> Result {
     let python = python::ensure_venv()?;
     let binary = build_release_binary()?;
     let mut cmd = Command::new(python);
-    cmd.args(["-m", "beam_body_study"])
+    cmd.args(["-m", module])
         .args(args)
         .env("BEAM_BODY_BIN", binary)
         .env("PYTHONPATH", python_path());
     let status = status_of(&mut cmd)?;
     match status.code() {
         Some(0) => Ok(()),
-        _ => Err(format!("the study tool failed ({status})").into()),
+        _ => Err(format!("{what} failed ({status})").into()),
     }
 }
 

@@ -1,0 +1,63 @@
+"""The integrator's cost per step against the number of elements: `python bench/python/cost_per_step.py`.
+
+The paper's scene (reduced, rtol 1e-6, no output rows), n = 1, 2, 4, ..., 32, over a span that
+takes the run about half a second; each run 5 times, interleaved across n, and the median of
+wall time / accepted steps (the CLI's own figures). What a step costs grows with the size of
+the Newton matrix: the table says by how much per doubling of n.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def run(cli: str, n: int, t_end: float) -> tuple:
+    args = [cli, "simulate", str(ROOT / "scenes" / "paper.toml"), "--elements", str(n),
+            "--set", f"t_end={t_end!r}", "--set", f"dt_out={t_end!r}", "-o", "/dev/null"]
+    err = subprocess.run(args, capture_output=True, text=True, check=True).stderr
+    steps = int(re.search(r"steps (\d+)", err).group(1))
+    jacs = int(re.search(r"Jacobians (\d+)", err).group(1))
+    lus = int(re.search(r"LU factorizations (\d+)", err).group(1))
+    wall = float(re.search(r"wall ([0-9.]+) ms", err).group(1)) / 1e3
+    return steps, jacs, lus, wall
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--cli", default=str(ROOT / "target" / "release" / "beam-body"))
+    p.add_argument("--rounds", type=int, default=5)
+    p.add_argument("--max-elements", type=int, default=32)
+    args = p.parse_args(argv)
+    ns = [n for n in (1, 2, 4, 8, 16, 32) if n <= args.max_elements]
+    # A span per n that costs about 0.5 s, from a short probe.
+    spans = {}
+    for n in ns:
+        steps, _, _, wall = run(args.cli, n, 0.05)
+        spans[n] = min(10.2, max(0.05, 0.05 * 0.5 / max(wall, 1e-4)))
+    samples = {n: [] for n in ns}
+    for _ in range(args.rounds):
+        for n in ns:
+            samples[n].append(run(args.cli, n, spans[n]))
+    print("| n | states | span [s] | steps | Jacobians | LU | µs per step (median) | "
+          "× previous n |")
+    print("|---|---|---|---|---|---|---|---|")
+    prev = None
+    for n in ns:
+        per_step = statistics.median(w / s for s, _, _, w in samples[n])
+        steps, jacs, lus, _ = samples[n][0]
+        ratio = f"{per_step / prev:.2f}" if prev else "–"
+        print(f"| {n} | {4 * n} | {spans[n]:.3g} | {steps:,} | {jacs:,} | {lus:,} | "
+              f"{1e6 * per_step:.3g} | {ratio} |")
+        prev = per_step
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
