@@ -145,6 +145,11 @@ impl BeamBodyN {
         )
     }
 
+    /// D = αM_b + βK, `None` without damping.
+    pub(super) fn damping_band(&self) -> Option<&Band> {
+        self.damping.as_ref()
+    }
+
     /// Rayleigh's (α [1/s], β [s]) in use: as given, or from `damping_ratio`.
     pub fn rayleigh(&self) -> (f64, f64) {
         self.rayleigh

@@ -8,6 +8,7 @@ mod dynamics;
 mod dynamics_n;
 mod elements;
 mod formulation;
+mod jacobian_n;
 mod kinematics;
 mod params;
 mod phi;

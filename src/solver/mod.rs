@@ -37,6 +37,7 @@ macro_rules! by_order {
     };
 }
 
+mod band;
 mod bdf;
 mod coeffs;
 mod config;
@@ -45,10 +46,12 @@ mod error;
 mod guard;
 mod lu;
 pub mod problems;
+mod second_order;
 mod snapshot;
 mod stats;
 mod system;
 
+pub use band::GenBand;
 pub use bdf::{Bdf, StepOutcome};
 pub use config::{check_rtol, BdfConfig, FixedStep};
 pub use error::SolverError;
@@ -57,5 +60,6 @@ pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
 /// solve as the integrator does them (`cargo xtask bench`, costs.csv).
 #[doc(hidden)]
 pub use lu::Lu;
+pub use second_order::{BandRankOne, SecondOrder, SecondOrderLu};
 pub use stats::Stats;
 pub use system::{OdeSystem, RangeViolation};
