@@ -31,31 +31,41 @@ def run(cli: str, n: int, t_end: float) -> tuple:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--cli", default=str(ROOT / "target" / "release" / "beam-body"))
+    p.add_argument("--cli", action="append",
+                   help="a beam-body binary (repeat to compare builds side by side, each run "
+                        "interleaved with the others'; default target/release/beam-body)")
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--max-elements", type=int, default=32)
     args = p.parse_args(argv)
+    clis = args.cli or [str(ROOT / "target" / "release" / "beam-body")]
     ns = [n for n in (1, 2, 4, 8, 16, 32) if n <= args.max_elements]
-    # A span per n that costs about 0.5 s, from a short probe.
+    # A span per n that costs the first build about 0.5 s, from a short probe.
     spans = {}
     for n in ns:
-        steps, _, _, wall = run(args.cli, n, 0.05)
+        _, _, _, wall = run(clis[0], n, 0.05)
         spans[n] = min(10.2, max(0.05, 0.05 * 0.5 / max(wall, 1e-4)))
-    samples = {n: [] for n in ns}
+    samples = {(c, n): [] for c in clis for n in ns}
     for _ in range(args.rounds):
         for n in ns:
-            samples[n].append(run(args.cli, n, spans[n]))
-    print("| n | states | span [s] | steps | Jacobians | LU | µs per step (median) | "
-          "× previous n |")
-    print("|---|---|---|---|---|---|---|---|")
-    prev = None
-    for n in ns:
-        per_step = statistics.median(w / s for s, _, _, w in samples[n])
-        steps, jacs, lus, _ = samples[n][0]
-        ratio = f"{per_step / prev:.2f}" if prev else "–"
-        print(f"| {n} | {4 * n} | {spans[n]:.3g} | {steps:,} | {jacs:,} | {lus:,} | "
-              f"{1e6 * per_step:.3g} | {ratio} |")
-        prev = per_step
+            for c in clis:
+                samples[c, n].append(run(c, n, spans[n]))
+    for c in clis:
+        print(f"\n{c}:\n")
+        print("| n | states | span [s] | steps | Jacobians | LU | µs per step (median) | "
+              "× previous n |" + (" × first build |" if c != clis[0] else ""))
+        print("|---|---|---|---|---|---|---|---|" + ("---|" if c != clis[0] else ""))
+        prev = None
+        for n in ns:
+            per_step = statistics.median(w / s for s, _, _, w in samples[c, n])
+            steps, jacs, lus, _ = samples[c, n][0]
+            ratio = f"{per_step / prev:.2f}" if prev else "–"
+            line = (f"| {n} | {4 * n} | {spans[n]:.3g} | {steps:,} | {jacs:,} | {lus:,} | "
+                    f"{1e6 * per_step:.3g} | {ratio} |")
+            if c != clis[0]:
+                first = statistics.median(w / s for s, _, _, w in samples[clis[0], n])
+                line += f" {per_step / first:.2f} |"
+            print(line)
+            prev = per_step
     return 0
 
 

@@ -8,7 +8,7 @@ use super::dynamics_n::BeamBodyN;
 use super::formulation::Formulation;
 use super::phi::PhiPiece;
 use super::systems::{check_deflection, check_drift, check_numbers, Kinematics};
-use crate::solver::{OdeSystem, RangeViolation};
+use crate::solver::{OdeSystem, RangeViolation, SecondOrder};
 use nalgebra::{DVector, Dyn};
 
 /// One of the four formulations of the model in n elements.
@@ -139,6 +139,19 @@ impl OdeSystem<Dyn> for ElementsSystem<'_> {
         rates.copy_from_slice(&y.as_slice()[nc..]);
         self.accelerations(t, y.as_slice(), acc);
         f
+    }
+
+    /// The reduced and linear formulations' Jacobian as bands and rank-one terms
+    /// (`jacobian_n.rs`); the DAE formulations' (with u2) by differences.
+    fn second_order(&self, t: f64, y: &DVector<f64>) -> Option<SecondOrder> {
+        let linear = match self.formulation {
+            Formulation::Reduced => false,
+            Formulation::Linear => true,
+            Formulation::Dae | Formulation::DaeStabilized => return None,
+        };
+        let nq = self.model.dofs();
+        let (q, qd) = y.as_slice().split_at(nq);
+        self.model.second_order(&self.phi.eval(t), q, qd, linear)
     }
 
     fn project(&self, _t: f64, y: &DVector<f64>) -> Option<DVector<f64>> {

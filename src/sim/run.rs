@@ -210,7 +210,9 @@ impl Run {
     ) -> Result<(), SolverError> {
         let sys = elements_system(&elements, self.piece, self.formulation);
         let y0 = sys.start(init.v1, init.theta1, init.dv1, init.dtheta1);
-        self.bdf = Integrator::Elements(Bdf::new(*options, t0, y0)?);
+        let mut bdf = Bdf::new(*options, t0, y0)?;
+        bdf.set_second_order(true);
+        self.bdf = Integrator::Elements(bdf);
         self.elements = Some(elements);
         Ok(())
     }

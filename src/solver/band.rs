@@ -34,6 +34,11 @@ impl GenBand {
         self.rows.len()
     }
 
+    /// Every stored entry, row by row (the fill-in room included): for a saved state.
+    pub(crate) fn entries_mut(&mut self) -> impl Iterator<Item = &mut f64> {
+        self.rows.iter_mut().flatten()
+    }
+
     /// A[i][j]; 0 outside the band.
     pub fn get(&self, i: usize, j: usize) -> f64 {
         if j + P < i || j > i + 2 * P {

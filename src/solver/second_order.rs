@@ -12,6 +12,7 @@
 //! O(m³) and its solve O(m²).
 
 use super::band::{BandLu, GenBand};
+use super::snapshot::StateVisitor;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// A band matrix plus u·vᵀ.
@@ -82,6 +83,24 @@ impl SecondOrder {
     /// The number of coordinates m (the system has 2m states).
     pub fn coordinates(&self) -> usize {
         self.mass.u.len()
+    }
+
+    /// Visits every number: each part's band entries (10 a row), u, v; named `structure`.
+    pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
+        for part in [&mut self.mass, &mut self.damping, &mut self.stiffness] {
+            for x in part.band.entries_mut().chain(part.u.iter_mut()).chain(part.v.iter_mut()) {
+                v.real("structure", x);
+            }
+        }
+    }
+
+    /// Whether every number is finite.
+    pub(crate) fn is_finite(&self) -> bool {
+        self.parts().iter().all(|p| {
+            let mut band = p.band.clone();
+            band.entries_mut().all(|x| x.is_finite())
+                && p.u.iter().chain(&p.v).all(|x| x.is_finite())
+        })
     }
 
     fn parts(&self) -> [&BandRankOne; 3] {

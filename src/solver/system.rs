@@ -1,3 +1,4 @@
+use super::SecondOrder;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
@@ -22,6 +23,15 @@ where
     /// The Jacobian `∂f/∂y`, when the system has an analytic one. `None` (the default) makes
     /// the solver use forward differences.
     fn jacobian(&self, _t: f64, _y: &OVector<f64, D>) -> Option<OMatrix<f64, D, D>> {
+        None
+    }
+
+    /// The Jacobian in the structured form of a mechanical system ([`SecondOrder`]: the
+    /// states are (x, ẋ) with x′ = ẋ exactly, and M, ∂R/∂ẋ, ∂R/∂x are bands plus rank one),
+    /// for a solver set up with [`Bdf::set_second_order`](super::Bdf::set_second_order):
+    /// Newton then costs O(n) a step. `None` (the default) falls back to
+    /// [`jacobian`](Self::jacobian) and a dense LU.
+    fn second_order(&self, _t: f64, _y: &OVector<f64, D>) -> Option<SecondOrder> {
         None
     }
 

@@ -11,6 +11,7 @@ use super::config::BdfConfig;
 use super::error::SolverError;
 use super::guard::StabilityGuard;
 use super::lu::Lu;
+use super::second_order::{SecondOrder, SecondOrderLu};
 use super::snapshot::{
     require, require_finite, require_non_negative, require_not_below_zero, visit_matrix,
     visit_usize, visit_vector, StateVisitor, MAX_COUNT,
@@ -173,6 +174,12 @@ where
     jac: OMatrix<f64, D, D>,
     jac_valid: bool,
     lu: Option<Lu<D>>,
+    /// With [`set_second_order`](Self::set_second_order): the system's structured Jacobian
+    /// at the point of `jac` (`jac` is then its dense copy, for the guard), and the O(n)
+    /// factorisation of the Newton matrix in place of `lu`.
+    second_order: bool,
+    structure: Option<SecondOrder>,
+    structured: Option<SecondOrderLu>,
     gamma: f64,
     gamma_lu: f64,
     /// What the Newton iteration derives from γ, γ of the LU and the coefficients, which
@@ -226,6 +233,9 @@ where
             jac: OMatrix::zeros_generic(d, d),
             jac_valid: false,
             lu: None,
+            second_order: false,
+            structure: None,
+            structured: None,
             gamma: 0.0,
             gamma_lu: 0.0,
             derived: NewtonScalars::default(),
@@ -240,6 +250,19 @@ where
         // What the (empty) coefficients and γ give, as a state read back would have.
         bdf.derive_from_coeffs();
         Ok(bdf)
+    }
+
+    /// Newton by the system's structured Jacobian ([`OdeSystem::second_order`]) where it gives
+    /// one, before the first step: O(n) a step for a mechanical system of banded coordinates.
+    /// It changes the saved state's layout ([`visit_state`](Self::visit_state)), so a reader
+    /// sets it as the writer did.
+    pub fn set_second_order(&mut self, on: bool) {
+        self.second_order = on;
+    }
+
+    /// Whether the Newton matrix is factored (densely or structured).
+    fn has_factor(&self) -> bool {
+        self.lu.is_some() || self.structured.is_some()
     }
 
     /// A different absolute tolerance for each state, each positive and finite (the uniform
@@ -275,6 +298,7 @@ where
         self.qu = 0;
         self.eta_max = ETA_MAX_FIRST;
         self.lu = None;
+        self.structured = None;
         self.derive_gamma_ratio();
         self.started = false;
         self.landing = None;
@@ -324,6 +348,7 @@ where
         self.h_next = h;
         self.hu = 0.0;
         self.lu = None;
+        self.structured = None;
         self.derive_gamma_ratio();
         self.started = true;
         self.update_weights();

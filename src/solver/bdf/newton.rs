@@ -16,7 +16,7 @@ where
     ) -> Result<(), NewtonFail> {
         loop {
             let gamma_ratio = self.derived.gamma_ratio;
-            let needs_setup = self.lu.is_none()
+            let needs_setup = !self.has_factor()
                 || conv_fail != ConvFail::None
                 || self.stats.steps >= self.steps_at_lu + REFACTOR_STEPS
                 || (gamma_ratio - 1.0).abs() > REFACTOR_GAMMA_RATIO;
@@ -42,7 +42,9 @@ where
     }
 
     pub(super) fn newton_iterate<S: OdeSystem<D>>(&mut self, sys: &S) -> Result<(), NewtonFail> {
-        let lu = self.lu.as_ref().ok_or(NewtonFail::Singular)?;
+        if !self.has_factor() {
+            return Err(NewtonFail::Singular);
+        }
         // A stale γ in the LU is corrected by scaling the update (CVODE cvLsSolve for BDF).
         let NewtonScalars { scale, inv_l1, tol, .. } = self.derived;
         let mut acor = OVector::<f64, D>::zeros_generic(self.zn[0].shape_generic().0, U1);
@@ -56,7 +58,15 @@ where
             // residual, the solve carries it into Δ (no product or sum makes it finite again),
             // and the test of ‖Δ‖ below fails in this same iteration.
             let residual = f * self.gamma - (&self.zn[1] * inv_l1 + &acor);
-            let delta = lu.solve(&residual) * scale;
+            let delta = match (&self.structure, &self.structured, &self.lu) {
+                (Some(parts), Some(f), _) => {
+                    let mut r = residual;
+                    f.solve(parts, r.as_mut_slice());
+                    r * scale
+                }
+                (_, _, Some(lu)) => lu.solve(&residual) * scale,
+                _ => return Err(NewtonFail::Singular),
+            };
             acor += &delta;
             y = &self.zn[0] + &acor;
             // The tests on squares: no square root on the iteration's chain (the one root
@@ -89,34 +99,48 @@ where
         let n = y.len();
         self.stats.jac_evals += 1;
         self.steps_at_jac = self.stats.steps;
-        let jac = match sys.jacobian(self.t, &y) {
-            Some(j) => j,
-            None => {
-                let f0 = sys.rhs(self.t, &y);
-                self.stats.rhs_evals_jac += 1;
-                if !f0.iter().all(|v| v.is_finite()) {
-                    return Err(NewtonFail::NonFinite);
-                }
-                let fnorm = self.wrms(&f0);
-                let min_inc = if fnorm > 0.0 {
-                    FD_MIN_INC_MULT * self.h.abs() * f64::EPSILON * n as f64 * fnorm
-                } else {
-                    1.0
-                };
-                let sqrt_eps = f64::EPSILON.sqrt();
-                let d = y.shape_generic().0;
-                let mut jac = OMatrix::<f64, D, D>::zeros_generic(d, d);
-                let mut yj = y.clone();
-                for j in 0..n {
-                    let inc = (sqrt_eps * y[j].abs()).max(min_inc / self.ewt[j]);
-                    yj[j] = y[j] + inc;
-                    let fj = sys.rhs(self.t, &yj);
-                    yj[j] = y[j];
-                    self.stats.rhs_evals_jac += 1;
-                    jac.set_column(j, &((fj - &f0) / inc));
-                }
-                jac
+        let structure = if self.second_order { sys.second_order(self.t, &y) } else { None };
+        let dense = structure.as_ref().map(|s| {
+            let d = y.shape_generic().0;
+            s.dense_jacobian()
+                .map(|j| OMatrix::<f64, D, D>::from_iterator_generic(d, d, j.iter().copied()))
+        });
+        self.structure = structure;
+        let jac = match dense {
+            Some(Some(j)) => j,
+            Some(None) => {
+                self.jac_valid = false;
+                return Err(NewtonFail::NonFinite);
             }
+            None => match sys.jacobian(self.t, &y) {
+                Some(j) => j,
+                None => {
+                    let f0 = sys.rhs(self.t, &y);
+                    self.stats.rhs_evals_jac += 1;
+                    if !f0.iter().all(|v| v.is_finite()) {
+                        return Err(NewtonFail::NonFinite);
+                    }
+                    let fnorm = self.wrms(&f0);
+                    let min_inc = if fnorm > 0.0 {
+                        FD_MIN_INC_MULT * self.h.abs() * f64::EPSILON * n as f64 * fnorm
+                    } else {
+                        1.0
+                    };
+                    let sqrt_eps = f64::EPSILON.sqrt();
+                    let d = y.shape_generic().0;
+                    let mut jac = OMatrix::<f64, D, D>::zeros_generic(d, d);
+                    let mut yj = y.clone();
+                    for j in 0..n {
+                        let inc = (sqrt_eps * y[j].abs()).max(min_inc / self.ewt[j]);
+                        yj[j] = y[j] + inc;
+                        let fj = sys.rhs(self.t, &yj);
+                        yj[j] = y[j];
+                        self.stats.rhs_evals_jac += 1;
+                        jac.set_column(j, &((fj - &f0) / inc));
+                    }
+                    jac
+                }
+            },
         };
         if !all_finite(jac.as_slice()) {
             self.jac_valid = false;
@@ -132,17 +156,27 @@ where
         Ok(())
     }
 
-    /// LU of I − γJ with the current γ.
+    /// LU of I − γJ with the current γ (structured, if the Jacobian is).
     pub(super) fn factor(&mut self) -> Result<(), NewtonFail> {
-        let d = self.jac.shape_generic().0;
-        let m = OMatrix::<f64, D, D>::identity_generic(d, d) - &self.jac * self.gamma;
-        self.lu = Lu::factor(&m);
+        if let Some(parts) = &self.structure {
+            self.structured = parts.factor(self.gamma);
+            self.lu = None;
+        } else {
+            let d = self.jac.shape_generic().0;
+            let m = OMatrix::<f64, D, D>::identity_generic(d, d) - &self.jac * self.gamma;
+            self.lu = Lu::factor(&m);
+            self.structured = None;
+        }
         self.stats.lu_factorizations += 1;
         self.steps_at_lu = self.stats.steps;
         self.gamma_lu = self.gamma;
         self.derive_gamma_ratio();
         self.rate = 1.0;
-        self.lu.as_ref().map(|_| ()).ok_or(NewtonFail::Singular)
+        if self.has_factor() {
+            Ok(())
+        } else {
+            Err(NewtonFail::Singular)
+        }
     }
 
     // ----- after an accepted step ---------------------------------------------------------

@@ -90,7 +90,7 @@ where
 
     /// The γ ratio and the update's scale of [`NewtonScalars`].
     pub(super) fn derive_gamma_ratio(&mut self) {
-        let ratio = if self.lu.is_some() { self.gamma / self.gamma_lu } else { 1.0 };
+        let ratio = if self.has_factor() { self.gamma / self.gamma_lu } else { 1.0 };
         self.derived.gamma_ratio = ratio;
         self.derived.scale = if ratio != 1.0 { 2.0 / (1.0 + ratio) } else { 1.0 };
     }

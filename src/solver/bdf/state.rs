@@ -2,6 +2,7 @@
 //! one: every value it could not have produced is refused before it is used.
 
 use super::*;
+use crate::solver::second_order::SecondOrder;
 
 impl<D: Dim> Bdf<D>
 where
@@ -26,6 +27,8 @@ where
     ///    `lu.factors` ×N² (column-major); `lu.perm` ×N (counts). Without an LU the factors
     ///    and the permutation are still visited: a writer gives zeros and the identity, and
     ///    a reader's values are discarded (reported through [`StateVisitor::discarded`]).
+    ///    With [`set_second_order`](Self::set_second_order), after `jac_valid`: `structure`
+    ///    (flag), its numbers, `lu` (flag) instead (`visit_structure`).
     /// 4. `gamma`; `gamma_lu`; `rate`; `steps_at_lu` (count); `steps_at_jac` (count);
     ///    `guard.modulus`, `guard.angle` for each of the guard's slots (8, or N/2 for N > 16);
     ///    `guard.count` (count).
@@ -55,16 +58,29 @@ where
         v.real("eta_max", &mut self.eta_max);
         visit_matrix(v, "jac", &mut self.jac);
         v.flag("jac_valid", &mut self.jac_valid);
-        let mut has_lu = self.lu.is_some();
-        v.flag("lu", &mut has_lu);
-        let mut lu = self.lu.clone().unwrap_or_else(|| Lu::placeholder(self.jac.shape_generic().0));
-        lu.visit(v);
-        if !has_lu {
-            v.discarded("lu", lu.is_placeholder());
+        let mut has_lu = self.has_factor();
+        if self.second_order {
+            self.visit_structure(v, &mut has_lu);
+        } else {
+            v.flag("lu", &mut has_lu);
+            let d = self.jac.shape_generic().0;
+            let mut lu = self.lu.clone().unwrap_or_else(|| Lu::placeholder(d));
+            lu.visit(v);
+            if !has_lu {
+                v.discarded("lu", lu.is_placeholder());
+            }
+            self.lu = has_lu.then_some(lu);
         }
-        self.lu = has_lu.then_some(lu);
         v.real("gamma", &mut self.gamma);
         v.real("gamma_lu", &mut self.gamma_lu);
+        if self.second_order {
+            // The structured factorisation is not saved: it follows from the parts and γ of
+            // the factorisation, bit for bit.
+            self.structured = match (&self.structure, has_lu) {
+                (Some(parts), true) => parts.factor(self.gamma_lu),
+                _ => None,
+            };
+        }
         // Derived, not visited: what a reader stored gives them.
         self.derive_from_coeffs();
         v.real("rate", &mut self.rate);
@@ -89,6 +105,24 @@ where
         }
         self.landing = landing.then_some(tstop);
         self.stats.visit(v);
+    }
+
+    /// With [`set_second_order`](Self::set_second_order), in place of the dense LU:
+    /// `structure` (flag: the structured Jacobian is present), its numbers
+    /// ([`SecondOrder::visit`]: zeros when absent, then discarded on reading), `lu` (flag: a
+    /// factorisation is present, computed again from them on reading).
+    fn visit_structure<V: StateVisitor + ?Sized>(&mut self, v: &mut V, has_lu: &mut bool) {
+        let mut present = self.structure.is_some();
+        v.flag("structure", &mut present);
+        let m = self.jac.nrows() / 2;
+        let mut parts = self.structure.clone().unwrap_or_else(|| SecondOrder::zeros(m));
+        parts.visit(v);
+        if !present {
+            v.discarded("structure", parts == SecondOrder::zeros(m));
+        }
+        self.structure = present.then_some(parts);
+        v.flag("lu", has_lu);
+        self.lu = None;
     }
 
     /// Checks a state a reader of [`visit_state`](Self::visit_state) just stored: every field
@@ -137,6 +171,9 @@ where
         require_finite(self.jac.iter(), "jac")?;
         if let Some(lu) = &self.lu {
             lu.check()?;
+        }
+        if let Some(parts) = &self.structure {
+            require(parts.is_finite(), "structure")?;
         }
         require_non_negative(&[self.gamma], "gamma")?;
         require_non_negative(&[self.gamma_lu], "gamma_lu")?;
