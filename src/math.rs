@@ -114,6 +114,17 @@ pub fn same_time(a: f64, b: f64, scale: f64) -> bool {
     (a - b).abs() <= 64.0 * f64::EPSILON * a.abs().max(b.abs()).max(scale)
 }
 
+/// A fixed pseudo-random sequence for tests, uniform in [0, 1): a 64-bit linear congruential
+/// generator (Knuth's MMIX constants), the top 53 bits of its state.
+#[cfg(test)]
+pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -151,11 +151,8 @@ mod tests {
 
     /// A random symmetric positive definite banded matrix and its dense copy.
     fn random(n: usize, seed: u64) -> (Band, DMatrix<f64>) {
-        let mut state = seed;
-        let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = crate::math::test_sequence(seed);
+        let mut next = || uniform() - 0.5;
         let mut a = Band::zeros(n);
         for i in 0..n {
             a.add(i, i, 4.0 + next());

@@ -39,6 +39,11 @@ impl GenBand {
         self.rows.iter_mut().flatten()
     }
 
+    /// Whether every stored entry is finite.
+    pub(crate) fn is_finite(&self) -> bool {
+        self.rows.iter().flatten().all(|x| x.is_finite())
+    }
+
     /// A[i][j]; 0 outside the band.
     pub fn get(&self, i: usize, j: usize) -> f64 {
         if j + P < i || j > i + 2 * P {
@@ -62,17 +67,17 @@ impl GenBand {
         }
     }
 
-    /// A·x added to `y`.
-    pub fn mul_add(&self, x: &[f64], y: &mut [f64]) {
+    /// s·A·x added to `y`.
+    pub fn mul_add(&self, s: f64, x: &[f64], y: &mut [f64]) {
         let n = self.n();
         for (i, (row, yi)) in self.rows.iter().zip(y.iter_mut()).enumerate() {
             let lo = i.saturating_sub(P);
             let hi = (i + P).min(n - 1);
-            let mut s = 0.0;
+            let mut sum = 0.0;
             for j in lo..=hi {
-                s += row[j + P - i] * x[j];
+                sum += row[j + P - i] * x[j];
             }
-            *yi += s;
+            *yi += s * sum;
         }
     }
 
@@ -117,7 +122,7 @@ impl GenBand {
                 }
             }
         }
-        a.rows.iter().all(|r| r.iter().all(|x| x.is_finite())).then_some(BandLu { lu: a, perm })
+        a.is_finite().then_some(BandLu { lu: a, perm })
     }
 }
 
@@ -159,11 +164,8 @@ mod tests {
     /// A pseudo-random band matrix (a small LCG) and its dense copy; `weak` makes the diagonal
     /// small, so that the factorisation has to interchange rows.
     fn random(n: usize, seed: u64, weak: bool) -> (GenBand, DMatrix<f64>) {
-        let mut state = seed;
-        let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = crate::math::test_sequence(seed);
+        let mut next = || uniform() - 0.5;
         let mut band = GenBand::zeros(n);
         for i in 0..n {
             for j in i.saturating_sub(P)..=(i + P).min(n - 1) {
@@ -186,7 +188,7 @@ mod tests {
             let err = (DVector::from_vec(x) - &want).amax();
             assert!(err <= 1e-11 * want.amax(), "n {n}: {err}");
             let mut y = vec![0.0; n];
-            band.mul_add(want.as_slice(), &mut y);
+            band.mul_add(1.0, want.as_slice(), &mut y);
             assert!((DVector::from_vec(y) - &b).amax() < 1e-12);
         }
     }

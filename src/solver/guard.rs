@@ -457,11 +457,8 @@ mod tests {
             ev.iter().map(|&(re, im)| math::hypot(re, im)).fold(0.0, f64::max)
         };
         // Random matrices (a fixed linear congruential sequence), of scales 1e-3 to 1e3.
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut uniform = math::test_sequence(12345);
+        let mut next = || uniform() * 2.0 - 1.0;
         for case in 0..300 {
             let scale = math::powi(10.0, case % 7 - 3);
             let m = Matrix4::from_fn(|_, _| next() * scale);

@@ -35,11 +35,10 @@ impl BandRankOne {
 
     /// A·x added, times `s`, to `y`.
     fn mul_add(&self, s: f64, x: &[f64], y: &mut [f64]) {
-        let mut bx = vec![0.0; x.len()];
-        self.band.mul_add(x, &mut bx);
-        let vx = dot(&self.v, x);
-        for ((y, b), u) in y.iter_mut().zip(&bx).zip(&self.u) {
-            *y += s * (b + u * vx);
+        self.band.mul_add(s, x, y);
+        let svx = s * dot(&self.v, x);
+        for (y, u) in y.iter_mut().zip(&self.u) {
+            *y += u * svx;
         }
     }
 
@@ -96,11 +95,9 @@ impl SecondOrder {
 
     /// Whether every number is finite.
     pub(crate) fn is_finite(&self) -> bool {
-        self.parts().iter().all(|p| {
-            let mut band = p.band.clone();
-            band.entries_mut().all(|x| x.is_finite())
-                && p.u.iter().chain(&p.v).all(|x| x.is_finite())
-        })
+        self.parts()
+            .iter()
+            .all(|p| p.band.is_finite() && p.u.iter().chain(&p.v).all(|x| x.is_finite()))
     }
 
     fn parts(&self) -> [&BandRankOne; 3] {
@@ -135,12 +132,7 @@ impl SecondOrder {
     /// and the state, at each Jacobian, not each step.
     pub fn dense_jacobian(&self) -> Option<DMatrix<f64>> {
         let m = self.coordinates();
-        let mass = SecondOrder {
-            mass: self.mass.clone(),
-            damping: BandRankOne::zeros(m),
-            stiffness: BandRankOne::zeros(m),
-        }
-        .factor(0.0)?;
+        let mass = SecondOrder { mass: self.mass.clone(), ..SecondOrder::zeros(m) }.factor(0.0)?;
         let mut j = DMatrix::zeros(2 * m, 2 * m);
         for k in 0..m {
             j[(k, m + k)] = 1.0;
@@ -161,11 +153,6 @@ impl SecondOrder {
 }
 
 impl SecondOrderLu {
-    /// The γ of the factorisation.
-    pub fn gamma(&self) -> f64 {
-        self.gamma
-    }
-
     /// Solves (I − γJ)(dx, dẋ) = (r1, r2) in place, `r` = (r1, r2) of 2m entries, with the
     /// parts this was factored from.
     pub fn solve(&self, parts: &SecondOrder, r: &mut [f64]) {
