@@ -49,9 +49,7 @@ import numpy as np
 from scipy.linalg import eigh
 from scipy.optimize import brentq
 
-PARAM_NAMES = ("l", "EI", "m", "M2", "J_C", "r", "g")
-#: The paper's example (Russkikh & Shklyarchuk 2020, section 4), see /work/shared/model-notes.md.
-DEFAULT_PARAMS = {"l": 2.5, "EI": 1000.0, "m": 2.0, "M2": 12.0, "J_C": 1.0, "r": 0.5, "g": 10.0}
+from paper_example import DEFAULT_PARAMS, PARAM_NAMES  # noqa: E402
 
 _PHI_TOL = 1e-12
 

@@ -42,18 +42,13 @@ import sympy as sp
 # Parameters
 # --------------------------------------------------------------------------------------------------
 
-PARAM_NAMES = ("l", "EI", "m", "M2", "J_C", "r", "g")
-DEFAULT_PARAMS = {"l": 2.5, "EI": 1000.0, "m": 2.0, "M2": 12.0, "J_C": 1.0, "r": 0.5, "g": 10.0}
+from paper_example import DEFAULT_PARAMS, PAPER_LAW, PARAM_NAMES  # noqa: E402
 
 # The paper's example (§4): default parameters and law, zero initial state, tau = t/T up to 12.
 # Every scene key of the CLI contract appears, so this also lists the names a scene may set.
 PAPER_SCENE = {
     **DEFAULT_PARAMS,
-    "t_rot": 0.85,
-    "phi_end": math.pi,
-    "phi0": 0.0,
-    "t_end": 10.2,
-    "dt_out": 0.0085,
+    **PAPER_LAW,
     "v1_0": 0.0,
     "theta1_0": 0.0,
     "dv1_0": 0.0,

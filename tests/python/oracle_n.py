@@ -67,18 +67,11 @@ from numpy.polynomial import Legendre, Polynomial
 # Parameters and the scene
 # --------------------------------------------------------------------------------------------------
 
-PARAM_NAMES = ("l", "EI", "m", "M2", "J_C", "r", "g")
-DEFAULT_PARAMS = {"l": 2.5, "EI": 1000.0, "m": 2.0, "M2": 12.0, "J_C": 1.0, "r": 0.5, "g": 10.0}
+from paper_example import DEFAULT_PARAMS, PAPER_LAW, PARAM_NAMES  # noqa: E402
+
 DAMPING_NAMES = ("damping_alpha", "damping_beta")
 
-PAPER_SCENE = {
-    **DEFAULT_PARAMS,
-    "t_rot": 0.85,
-    "phi_end": math.pi,
-    "phi0": 0.0,
-    "t_end": 10.2,
-    "dt_out": 0.0085,
-}
+PAPER_SCENE = {**DEFAULT_PARAMS, **PAPER_LAW}
 
 CACHE_DIR = Path(__file__).resolve().parents[2] / "target" / "oracle-cache"
 

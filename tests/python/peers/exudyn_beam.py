@@ -66,8 +66,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-#: The paper's example (SI), the same names as the CLI's settings.
-PAPER = {"l": 2.5, "EI": 1000.0, "m": 2.0, "M2": 12.0, "J_C": 1.0, "r": 0.5, "g": 10.0}
+from paper_example import DEFAULT_PARAMS as PAPER  # noqa: E402  (the paper's example, SI)
 
 
 class PeerRun(NamedTuple):
