@@ -30,6 +30,7 @@
 
 #![deny(unsafe_code)]
 
+#[cfg(feature = "cli")]
 pub mod csv;
 pub mod fmi;
 pub mod fmi2;

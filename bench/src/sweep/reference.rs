@@ -55,6 +55,9 @@ pub enum RefError {
         name: &'static str,
         value: f64,
     },
+    /// The reference of a beam of several elements, the BDF itself at a tight tolerance
+    /// (`super::own_reference`), failed with this message.
+    Own(String),
 }
 
 impl std::fmt::Display for RefError {
@@ -66,6 +69,7 @@ impl std::fmt::Display for RefError {
             RefError::OutOfRange { t, name, value } => {
                 write!(f, "{name} = {value:e} at t = {t} is out of range")
             }
+            RefError::Own(message) => write!(f, "the BDF reference: {message}"),
         }
     }
 }

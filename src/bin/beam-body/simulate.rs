@@ -33,7 +33,8 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         ),
         None => Box::new(io::stdout().lock()),
     };
-    let mut out = BufWriter::new(sink);
+    // 64 KiB: a system call per 200 rows instead of 25 (8 KiB).
+    let mut out = BufWriter::with_capacity(1 << 16, sink);
     let failed = |e: io::Error, out: &Option<String>| match out {
         None => stdout_failed(e),
         Some(path) => Failure::Usage(format!("writing {path} failed: {e}")),
