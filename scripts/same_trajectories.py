@@ -2,12 +2,13 @@
 refactoring changed no result.
 
     python scripts/same_trajectories.py fmu OLD.fmu NEW.fmu
-    python scripts/same_trajectories.py cli OLD/beam-body NEW/beam-body
+    python scripts/same_trajectories.py cli OLD/beam-body NEW/beam-body [--simulate-only]
 
 FMU: FMPy runs of every formulation with the law, and with the input fed from the law's values
 and derivatives (phi_source = input), at two tolerances; every output at every communication
-point must be equal as doubles. CLI: `simulate` on the regression scenes and the first 200 cases of each example study, stdout
-byte for byte.
+point must be equal as doubles. CLI: `simulate` on the regression scenes and the first 200 cases
+of each example study, stdout byte for byte; `--simulate-only` leaves out the studies (against a
+build before 2026-12-04, whose study metrics came from the output grid, not the dense output).
 Exit code 0 when all agree, 1 with the first difference otherwise.
 """
 
@@ -66,9 +67,9 @@ SCENES = [
 ]
 
 
-def compare_clis(old: str, new: str) -> int:
+def compare_clis(old: str, new: str, studies: bool) -> int:
     runs = [["simulate", str(REPO / "scenes" / scene), *extra] for scene, extra in SCENES]
-    for study in sorted((REPO / "examples").glob("*.toml")):
+    for study in sorted((REPO / "examples").glob("*.toml")) if studies else []:
         runs.append(["study", str(study), "--cases", "0..200", "--quiet"])
     for args in runs:
         a = subprocess.run([old, *args], capture_output=True, check=True).stdout
@@ -76,10 +77,12 @@ def compare_clis(old: str, new: str) -> int:
         if a != b:
             print(f"differ: {' '.join(args)}")
             return 1
-    print(f"{len(runs)} CLI runs (scenes and study chunks): CSV identical byte for byte")
+    print(f"{len(runs)} CLI runs ({'scenes and study chunks' if studies else 'scenes'}): CSV "
+          "identical byte for byte")
     return 0
 
 
 if __name__ == "__main__":
     kind, old, new = sys.argv[1:4]
-    sys.exit(compare_fmus(old, new) if kind == "fmu" else compare_clis(old, new))
+    studies = "--simulate-only" not in sys.argv[4:]
+    sys.exit(compare_fmus(old, new) if kind == "fmu" else compare_clis(old, new, studies))

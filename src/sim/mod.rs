@@ -73,23 +73,57 @@ pub fn simulate_partial(
     scene: &Scene,
     mut sink: impl FnMut(&Outputs, &Run) -> ControlFlow<()>,
 ) -> (Report, Result<(), SimError>) {
+    with_run(scene, |run, warning| {
+        let mut emit = |run: &mut Run, t: f64| {
+            note_warning(run, warning);
+            match sink(&run.outputs_at(t)?, run) {
+                ControlFlow::Continue(()) => Ok(()),
+                ControlFlow::Break(()) => Err(SimError::Stopped),
+            }
+        };
+        drive(scene, run, |run, t, times| run.step_to_sampling(t, times, &mut emit))
+    })
+}
+
+/// Runs the scene, calling `sink` after every integrator step with the run and the time the
+/// step started from: the run's dense output covers the step, and the steps tile [0, t_end].
+/// For what lies between the points of a grid (a study's peaks, [`crate::study`]); the
+/// output grid is not used. Reports as [`simulate_partial`].
+pub fn simulate_steps(
+    scene: &Scene,
+    mut sink: impl FnMut(&Run, f64),
+) -> (Report, Result<(), SimError>) {
+    with_run(scene, |run, warning| {
+        let mut each = |run: &mut Run, from: f64| {
+            note_warning(run, warning);
+            sink(run, from);
+            Ok(())
+        };
+        drive(scene, run, |run, t, _| run.step_each(t, &mut each))
+    })
+}
+
+/// Starts the scene's run, lets `body` step it, and reports its counters and the first
+/// warning (`body` notes those of the steps it sees, [`note_warning`]).
+fn with_run(
+    scene: &Scene,
+    body: impl FnOnce(&mut Run, &mut Option<String>) -> Result<(), SimError>,
+) -> (Report, Result<(), SimError>) {
     let mut run = match start(scene) {
         Ok(run) => run,
         Err(e) => return (Report::default(), Err(e)),
     };
     let mut warning = None;
-    let mut emit = |run: &mut Run, t: f64| {
-        if let Some(w) = run.take_warning() {
-            warning = Some(w);
-        }
-        match sink(&run.outputs_at(t)?, run) {
-            ControlFlow::Continue(()) => Ok(()),
-            ControlFlow::Break(()) => Err(SimError::Stopped),
-        }
-    };
-    let result = drive(scene, &mut run, &mut emit);
+    let result = body(&mut run, &mut warning);
     let warning = warning.or_else(|| run.take_warning());
     (Report { stats: run.stats(), warning }, result)
+}
+
+/// Keeps the warning of the step just taken, if any.
+fn note_warning(run: &mut Run, warning: &mut Option<String>) {
+    if let Some(w) = run.take_warning() {
+        *warning = Some(w);
+    }
 }
 
 /// The law's φ, φ′, φ″ at t as a host sends them (with `input_derivatives`, the
@@ -109,26 +143,24 @@ fn start(scene: &Scene) -> Result<Run, SimError> {
     Run::start(scene, 0.0, host_sample(scene, 0.0), BdfConfig::default().max_steps)
 }
 
-/// Steps `run` to t_end, calling `emit` at every output time.
+/// Steps `run` to t_end through `segment(run, t, times)`, which steps to t with the output
+/// times up to t: once with the law, or once per communication interval with the host's
+/// sample at its start.
 fn drive(
     scene: &Scene,
     run: &mut Run,
-    emit: &mut impl FnMut(&mut Run, f64) -> Result<(), SimError>,
+    mut segment: impl FnMut(&mut Run, f64, &mut dyn Iterator<Item = f64>) -> Result<(), SimError>,
 ) -> Result<(), SimError> {
-    let outputs = scene.output_times();
+    let mut outputs = scene.output_times().peekable();
     if scene.phi_source == PhiSource::Law {
-        return run.step_to_sampling(scene.t_end, outputs, emit);
+        return segment(run, scene.t_end, &mut outputs);
     }
     // As a host does: the law's value (and derivatives) at each communication point.
-    let mut outputs = outputs.peekable();
     let mut comm = grid(scene.dt_comm, scene.t_end).peekable();
     while let (Some(a), Some(&b)) = (comm.next(), comm.peek()) {
         run.set_sample(host_sample(scene, a));
-        let mut times = Vec::new();
-        while let Some(t) = outputs.next_if(|&t| t <= b) {
-            times.push(t);
-        }
-        run.step_to_sampling(b, times, &mut *emit)?;
+        let mut times = std::iter::from_fn(|| outputs.next_if(|&t| t <= b));
+        segment(run, b, &mut times)?;
     }
     Ok(())
 }
@@ -137,6 +169,27 @@ fn drive(
 mod tests {
     use super::*;
     use crate::model::Formulation;
+
+    /// The steps `simulate_steps` reports tile [0, t_end], across the law's breakpoint and a
+    /// host's samples, and are the steps of the run `simulate` takes.
+    #[test]
+    fn simulate_steps_sees_every_step_of_the_run() {
+        for phi_source in [PhiSource::Law, PhiSource::Input] {
+            let scene = Scene { t_end: 2.0, phi_source, dt_comm: 0.1, ..Scene::default() };
+            let mut ends = vec![0.0];
+            let (report, result) = simulate_steps(&scene, |run, from| {
+                assert_eq!(from, *ends.last().unwrap(), "{phi_source:?}");
+                assert!(run.t() > from);
+                ends.push(run.t());
+            });
+            result.unwrap();
+            assert_eq!(*ends.last().unwrap(), scene.t_end);
+            assert!(ends.contains(&scene.law.t_rot) || phi_source == PhiSource::Input);
+            let grid = simulate(&scene, |_| {}).unwrap();
+            assert_eq!(report.stats, grid.stats, "{phi_source:?}");
+            assert_eq!(ends.len() as u64 - 1, report.stats.steps, "{phi_source:?}");
+        }
+    }
 
     #[test]
     fn state_at_matches_the_outputs() {

@@ -52,6 +52,8 @@ pub struct Run {
     /// step: that step probes whether the history survives the change
     /// ([`Bdf::probe_step`]). Only within one [`step_to`](Self::step_to).
     untested_join: bool,
+    /// Within [`step_each`](Self::step_each): each advance takes one integrator step.
+    single_step: bool,
     bdf: Integrator,
 }
 
@@ -63,12 +65,23 @@ fn advance_probing<D: Dim, S: OdeSystem<D>>(
     tout: f64,
     tstop: f64,
     probe: bool,
+    single: bool,
 ) -> Result<(), SolverError>
 where
     DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
-    if probe && bdf.t() < tout && bdf.probe_step(sys, tstop)? == StepOutcome::Rejected {
-        bdf.reinit(bdf.t(), bdf.y().clone())?;
+    if probe && bdf.t() < tout {
+        if bdf.probe_step(sys, tstop)? == StepOutcome::Rejected {
+            bdf.reinit(bdf.t(), bdf.y().clone())?;
+        } else if single {
+            return Ok(());
+        }
+    }
+    if single {
+        if bdf.t() < tout {
+            bdf.step(sys, tstop)?;
+        }
+        return Ok(());
     }
     bdf.advance(sys, tout, tstop)
 }
@@ -195,6 +208,7 @@ impl Run {
             range: RangeCheck::Stop,
             warning: None,
             untested_join: false,
+            single_step: false,
             bdf,
         })
     }
@@ -306,6 +320,37 @@ impl Run {
         result
     }
 
+    /// Steps to `t` as [`step_to_sampling`](Self::step_to_sampling) does, calling `sink`
+    /// after every integrator step with the time the step started from: the step's dense
+    /// output ([`outputs_at`](Self::outputs_at)) then covers [that time, [`t`](Self::t)], and
+    /// the steps tile the interval without a gap. For what a grid would miss: the extrema of
+    /// an output between the grid's points (a study's peaks).
+    pub fn step_each(
+        &mut self,
+        t: f64,
+        mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
+    ) -> Result<(), SimError> {
+        let (t0, piece) = (self.t(), self.piece);
+        let result = self.begin(t).and_then(|()| {
+            while self.t() < t && !math::same_time(self.t(), t, 0.0) {
+                let before = self.t();
+                self.single_step = true;
+                let stepped = self.advance_to(t, t);
+                self.single_step = false;
+                stepped?;
+                if self.t() > before {
+                    sink(self, before)?;
+                }
+            }
+            Ok(())
+        });
+        if result.is_err() && self.t() <= t0 {
+            self.piece = piece;
+        }
+        self.untested_join = false;
+        result
+    }
+
     /// Chooses the piece for the interval to `t` from a pending sample.
     fn begin(&mut self, t: f64) -> Result<(), SimError> {
         let now = self.t();
@@ -394,6 +439,9 @@ impl Run {
             }
             if turning && tout > bp && tstop > bp {
                 self.advance(bp, bp)?;
+                if self.single_step {
+                    return Ok(());
+                }
                 continue;
             }
             let stop = if turning { tstop.min(bp) } else { tstop };
@@ -414,14 +462,15 @@ impl Run {
             let elements_model = self.elements.as_deref();
             let range_check = self.range != RangeCheck::Off;
             let probe = std::mem::take(&mut self.untested_join);
+            let single = self.single_step;
             let result = match &mut self.bdf {
                 Integrator::TwoDof(b) => {
                     let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
-                    advance_probing(b, &sys, tout, tstop, probe)
+                    advance_probing(b, &sys, tout, tstop, probe, single)
                 }
                 Integrator::Dae(b) => {
                     let sys = DaeSystem { range_check, ..dae(model, piece, formulation) };
-                    advance_probing(b, &sys, tout, tstop, probe)
+                    advance_probing(b, &sys, tout, tstop, probe, single)
                 }
                 Integrator::Elements(b) => {
                     let model = elements_model.expect("a run of elements has its model");
@@ -429,7 +478,7 @@ impl Run {
                         range_check,
                         ..elements_system(model, piece, formulation)
                     };
-                    advance_probing(b, &sys, tout, tstop, probe)
+                    advance_probing(b, &sys, tout, tstop, probe, single)
                 }
             };
             match result {

@@ -1,68 +1,7 @@
 //! One case of a study: its parameter values, its run and its metrics.
 
+use super::peaks::Peaks;
 use super::*;
-
-/// The metrics of one run so far.
-pub(super) struct Accumulator {
-    v1_eq: f64,
-    t_rot: f64,
-    /// `None` until the first output time at or after t_rot.
-    residual: Option<f64>,
-    peak_m: f64,
-    peak_m_root: f64,
-    peak_n: f64,
-    peak_p: f64,
-    max_v1: f64,
-    max_theta1: f64,
-    energy: f64,
-}
-
-impl Accumulator {
-    fn new(v1_eq: f64, t_rot: f64) -> Self {
-        Self {
-            v1_eq,
-            t_rot,
-            residual: None,
-            peak_m: 0.0,
-            peak_m_root: 0.0,
-            peak_n: 0.0,
-            peak_p: 0.0,
-            max_v1: 0.0,
-            max_theta1: 0.0,
-            energy: f64::NAN,
-        }
-    }
-
-    /// `f64::max` ignores a NaN operand; a NaN output must reach the metric and fail the row.
-    fn add(&mut self, o: &Outputs) {
-        let max = |acc: f64, x: f64| if x.is_nan() || acc.is_nan() { f64::NAN } else { acc.max(x) };
-        let r = &o.reactions;
-        self.peak_m = max(self.peak_m, r.m.abs());
-        self.peak_m_root = max(self.peak_m_root, o.root.1.abs());
-        self.peak_n = max(self.peak_n, r.n.abs());
-        self.peak_p = max(self.peak_p, r.p.abs());
-        self.max_v1 = max(self.max_v1, o.v1.abs());
-        self.max_theta1 = max(self.max_theta1, o.theta1.abs());
-        if o.t >= self.t_rot {
-            let d = (o.v1 - self.v1_eq).abs();
-            self.residual = Some(self.residual.map_or(d, |r| max(r, d)));
-        }
-        self.energy = o.energy;
-    }
-
-    fn get(&self, m: Metric) -> f64 {
-        match m {
-            Metric::ResidualV1 => self.residual.unwrap_or(f64::NAN),
-            Metric::PeakM => self.peak_m,
-            Metric::PeakMRoot => self.peak_m_root,
-            Metric::PeakN => self.peak_n,
-            Metric::PeakP => self.peak_p,
-            Metric::MaxV1 => self.max_v1,
-            Metric::MaxTheta1 => self.max_theta1,
-            Metric::EnergyFinal => self.energy,
-        }
-    }
-}
 
 impl Study {
     /// The parameters' values of case `case` (< [`cases`](Self::cases)). The grids vary in
@@ -144,11 +83,8 @@ impl Study {
         } else {
             0.0 // unused; an invalid model is reported by the run
         };
-        let mut acc = Accumulator::new(v1_eq, scene.law.t_rot);
-        let (report, result) = simulate_partial(&scene, |o, _| {
-            acc.add(o);
-            std::ops::ControlFlow::Continue(())
-        });
+        let mut acc = Peaks::new(&self.metrics, v1_eq, scene.law.t_rot, scene.t_end);
+        let (report, result) = simulate_steps(&scene, |run, from| acc.step(run, from));
         row.steps = report.stats.steps;
         match result {
             Ok(()) => {

@@ -12,6 +12,7 @@
 mod axis;
 mod case;
 mod file;
+mod peaks;
 mod runner;
 mod sample;
 
@@ -19,10 +20,10 @@ pub use axis::{Axis, Distribution};
 pub use runner::run_cases;
 pub use sample::{normal_cdf, normal_quantile};
 
-use crate::model::{BeamBody, BeamBodyN, Formulation, Outputs};
+use crate::model::{BeamBody, BeamBodyN, Formulation};
 use crate::scene::locate;
 use crate::settings::{Setting, SETTINGS};
-use crate::sim::{simulate_partial, Scene, SimError};
+use crate::sim::{simulate_steps, Scene, SimError};
 use crate::solver::SolverError;
 use sample::{grid_point, latin_hypercube, name_key, open_unit};
 use std::fmt;
@@ -34,7 +35,8 @@ pub fn variables() -> impl Iterator<Item = &'static Setting> {
     SETTINGS.iter().filter(|s| s.appears.study)
 }
 
-/// What a study computes per run, over the output times k·dt_out of the run.
+/// What a study computes per run, from the integrator's dense output over every step
+/// ([`peaks`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Metric {
     /// max |v1 − v1_eq| [m] over t ≥ t_rot, with v1_eq the static deflection at φ_end (of the

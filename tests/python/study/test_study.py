@@ -370,7 +370,10 @@ def test_a_bad_study_file_is_refused_before_anything_runs(beam_body, tmp_path, t
 
 def test_metrics_are_those_of_the_simulated_outputs(beam_body, tmp_path):
     """residual_v1 about the bent state of a turn to pi/2, with the oracle's static deflection,
-    and the peaks, from `beam-body simulate`'s CSV of the same case."""
+    and the peaks, against `beam-body simulate`'s CSV of the same case. The study takes its
+    peaks from the integrator's dense output, so they lie above the CSV's on the study's own
+    0.005 s grid, and within a fine grid's error of the peaks on a 0.1 ms grid: the grid misses
+    about (omega*dt)^2/8 of a peak, 1.5e-6 at the second mode's 35 rad/s."""
     study = write(tmp_path / "half.toml", f"""
 scene = "{PAPER_SCENE}"
 [set]
@@ -386,19 +389,31 @@ values = [8, 16]
     assert [r["status"] for r in table] == ["ok"] * 4
     for row in table:
         csv = run_cli(beam_body, ["simulate", PAPER_SCENE, "--set", "t_end=4.0", "--set",
-                                  "phi_end=1.5707963267948966", "--set", "dt_out=0.005",
+                                  "phi_end=1.5707963267948966", "--set", "dt_out=0.0001",
                                   "--set", f"t_rot={row['t_rot']}", "--set", f"M2={row['M2']}"])
-        data = read_csv(csv)
+        fine = read_csv(csv)
+        coarse = {k: v[::50] for k, v in fine.items()}
+        assert np.allclose(coarse["t"][1:], np.arange(1, 801) * 0.005, rtol=0, atol=1e-12)
         params = {"M2": row["M2"]}
         v1_eq, _ = oracle.static_equilibrium(math.pi / 2, params)
-        after = data["t"] >= row["t_rot"]
-        residual = np.max(np.abs(data["v1"][after] - v1_eq))
-        assert abs(row["residual_v1"] - residual) <= 1e-9 * abs(v1_eq), (row, residual)
-        assert row["residual_v1"] < np.max(np.abs(data["v1"]))
-        for metric, column in (("peak_M", "M"), ("peak_N", "N"), ("peak_P", "P"),
-                               ("max_v1", "v1"), ("max_theta1", "theta1")):
-            assert row[metric] == np.max(np.abs(data[column])), metric
-        assert row["energy_final"] == data["energy"][-1]
+
+        def peaks(data):
+            after = data["t"] >= row["t_rot"]
+            out = {"residual_v1": np.max(np.abs(data["v1"][after] - v1_eq))}
+            for metric, column in (("peak_M", "M"), ("peak_N", "N"), ("peak_P", "P"),
+                                   ("max_v1", "v1"), ("max_theta1", "theta1")):
+                out[metric] = np.max(np.abs(data[column]))
+            return out
+
+        on_fine, on_coarse = peaks(fine), peaks(coarse)
+        for metric, value in on_fine.items():
+            # The oracle's v1_eq against the Rust one's: 1e-9 of the deflection.
+            slack = 1e-9 * abs(v1_eq) if metric == "residual_v1" else 1e-12 * value
+            assert row[metric] >= on_coarse[metric] - slack, (metric, row, on_coarse)
+            assert row[metric] >= value - slack, (metric, row[metric], value)
+            assert row[metric] - value <= 2e-6 * row[metric] + slack, (metric, row[metric], value)
+        assert row["residual_v1"] < np.max(np.abs(fine["v1"]))
+        assert row["energy_final"] == fine["energy"][-1]
 
 
 def test_latin_hypercube_samples_fill_the_strata_of_scipys_distributions(beam_body, tmp_path):
