@@ -32,6 +32,10 @@ fn main() -> ExitCode {
     };
     let result = match command {
         "bench" => Mode::parse(command, options).and_then(bench::run),
+        "bench-elements" => Mode::parse(command, options).and_then(bench::elements::run),
+        "bench-elements-run" => {
+            Mode::parse(command, options).and_then(bench::elements::run_measure)
+        }
         "bench-run" => bench::parse_round(options).and_then(bench::run_round),
         "bench-ab" => ab::run(options),
         "bench-dostep" => Mode::parse(command, options).and_then(bench::run_dostep),

@@ -16,7 +16,7 @@ pub use crate::scene::{InitialState, PhiSource, Scene};
 
 mod run;
 
-pub use run::{dae, dae_start, two_dof, two_dof_start, PhiInput, Run};
+pub use run::{dae, dae_start, elements_system, two_dof, two_dof_start, PhiInput, Run};
 
 /// Why a run failed.
 #[derive(Clone, Debug, PartialEq)]

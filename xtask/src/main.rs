@@ -58,6 +58,11 @@ Commands:
           communication steps 1e-2, 1e-3, 1e-4 s, for each way phi arrives (law, values,
           values with derivatives, taylor) against the fixed-step BDF2 floor; 10 rounds
           (3 with --quick); target/bench/dostep.{csv,md}, and docs/dostep.md in the full run.
+  bench-elements [--quick]
+          Work against precision of the beam in 8 elements (32 states, 1 % damping): ours
+          beside CVODE (dense) and diffsol on the same right-hand side, the error against ours
+          at rtol 1e-12; rtol 1e-4..1e-10 (3 tolerances with --quick), 5 rounds (3), medians;
+          target/bench/elements.md, and docs/work_precision_elements.md in the full run.
   bench-run --round K
           One round of the benchmark's Rust cases (used by `bench`, in a release build
           with --features bench): run the cases of target/bench/cases.csv in an order
@@ -172,8 +177,10 @@ fn run(args: &[String]) -> Result {
         "study" => study::run(options),
         "model-error" => study::model_error(options),
         // The benchmarks and experiments live in their own crate (bench/); these run it.
-        "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-study" | "sweep"
-        | "sweep-case" | "figures" | "profile" => xtask::bench(command, options),
+        "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-elements"
+        | "bench-elements-run" | "bench-study" | "sweep" | "sweep-case" | "figures" | "profile" => {
+            xtask::bench(command, options)
+        }
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     }
 }

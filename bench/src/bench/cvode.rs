@@ -45,7 +45,7 @@ use beam_body::solver::OdeSystem;
 use libloading::Library;
 use nalgebra::{Const, SVector};
 
-use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
+use super::problem::{state_names, with_system, Counters, Outcome, Problem, States, WithSystem};
 
 /// Names the CVODE library to load (see the module's documentation).
 const LIBRARY_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
@@ -643,7 +643,8 @@ where
     s.check(unsafe { (api.set_stop_time)(s.mem, stop) }, "CVodeSetStopTime", &log)?;
 
     let mut work = Work::default();
-    let mut states = States::with_capacity(problem.grid.len());
+    let mut states = States::with_capacity(problem.grid.len())
+        .leading(state_names(problem.scene.formulation).len());
     let row = |t: f64, y: SVector<f64, N>, data: &UserData<S>| -> SVector<f64, N> {
         // The driver's outputs are projected too (`DaeSystem::outputs`).
         data.system.get().project(t, &y).unwrap_or(y)

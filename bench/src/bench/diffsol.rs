@@ -33,7 +33,7 @@ use diffsol::{
 };
 use nalgebra::{Const, SVector};
 
-use super::problem::{with_system, Counters, Outcome, Problem, States, WithSystem};
+use super::problem::{state_names, with_system, Counters, Outcome, Problem, States, WithSystem};
 
 /// Solves `problem` with diffsol's BDF at `rtol`, atol = 1e-3·rtol for every state.
 pub fn run(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
@@ -104,7 +104,8 @@ where
     }
     bounds.push(t_end);
 
-    let mut states = States::with_capacity(grid.len());
+    let mut states =
+        States::with_capacity(grid.len()).leading(state_names(problem.scene.formulation).len());
     let first = system(law.piece_from(t0));
     states.push(row(&first, t0, y0).as_slice());
     let mut work = Work::default();

@@ -29,6 +29,7 @@ mod cvode;
 #[cfg(feature = "peers")]
 mod diffsol;
 mod dostep;
+pub mod elements;
 pub mod fmu;
 mod ours;
 pub mod problem;
@@ -427,14 +428,14 @@ pub fn run(mode: Mode) -> Result {
 }
 
 /// The variable that names the CVODE library `cvode.rs` loads.
-const CVODE_LIB_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
+pub(crate) const CVODE_LIB_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
 
 /// The CVODE library of the `cvode` cases: the one named by `BEAM_BODY_CVODE_LIB` if set,
 /// else an optimised build from source ([`sundials_build`]); `None` when that build fails,
 /// and the cvode cases then fail, each with its reason. (Debian's `libsundials-cvode6` is
 /// compiled at -O0, about 3x slower than the same source at -O2: a flattering peer, so it is
 /// no fallback.)
-fn optimized_cvode() -> Option<PathBuf> {
+pub(crate) fn optimized_cvode() -> Option<PathBuf> {
     if let Some(lib) = std::env::var_os(CVODE_LIB_VARIABLE) {
         eprintln!("cvode: {CVODE_LIB_VARIABLE} = {}", PathBuf::from(&lib).display());
         return Some(lib.into());

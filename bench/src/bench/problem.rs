@@ -4,10 +4,10 @@
 use std::fs;
 use std::path::Path;
 
-use beam_body::model::{BeamBody, Formulation, PhiPiece};
+use beam_body::model::{BeamBody, BeamBodyN, ElementsSystem, Formulation, PhiPiece};
 use beam_body::sim::{self, Scene};
-use beam_body::solver::OdeSystem;
-use nalgebra::{Const, SVector};
+use beam_body::solver::{OdeSystem, RangeViolation};
+use nalgebra::{Const, DVector, SVector};
 
 use crate::{project_root, relative};
 
@@ -34,9 +34,28 @@ pub trait WithSystem {
 
 /// Calls `w` with the scene's formulation as a system of 4 (reduced, linear) or 6 (dae,
 /// dae_stabilized) states and its initial state, the DAE's u2 and u̇2 made consistent with
-/// the constraint as `Run` starts them.
+/// the constraint as `Run` starts them. A beam of 8 elements (reduced) is a system of 32
+/// states, [`FixedElements`].
 pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::Output {
     let init = scene.initial;
+    if scene.params.n_elements > 1 {
+        assert!(
+            scene.params.n_elements == ELEMENTS && scene.formulation == Formulation::Reduced,
+            "the outside solvers take the beam in {ELEMENTS} elements, reduced, only"
+        );
+        let beam = BeamBodyN::new(scene.params).expect("a valid scene");
+        let system = |phi| FixedElements::<{ 4 * ELEMENTS }> {
+            system: sim::elements_system(&beam, phi, Formulation::Reduced),
+        };
+        let native = system(scene.law.piece_from(0.0)).system.start(
+            init.v1,
+            init.theta1,
+            init.dv1,
+            init.dtheta1,
+        );
+        let y0 = SVector::from_fn(|k, _| native[FixedElements::<{ 4 * ELEMENTS }>::native(k)]);
+        return w.apply(system, y0);
+    }
     match scene.formulation {
         Formulation::Reduced | Formulation::Linear => {
             w.apply(|phi| sim::two_dof(model, phi, scene.formulation), sim::two_dof_start(&init))
@@ -46,6 +65,51 @@ pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::O
             let y0 = sim::dae_start(&system(scene.law.piece_from(0.0)), &init);
             w.apply(system, y0)
         }
+    }
+}
+
+/// The elements of the beam the outside solvers take ([`FixedElements`]).
+pub const ELEMENTS: usize = 8;
+
+/// The beam in n = N/4 elements, reduced, as a system of N states on the stack for the
+/// outside solvers, whose interfaces are of fixed size: the tip's (v1, ϑ1, v̇1, ϑ̇1) first
+/// (what the benchmark records), then the other nodes' coordinates and rates in the order of
+/// `ElementsSystem`. The right-hand side is `ElementsSystem`'s, through a copy each way.
+#[derive(Clone, Copy)]
+pub struct FixedElements<'a, const N: usize> {
+    pub system: ElementsSystem<'a>,
+}
+
+impl<const N: usize> FixedElements<'_, N> {
+    /// The index in `ElementsSystem`'s state of our state `k`: its coordinates are
+    /// (v_1, ϑ_1, …, v_n, ϑ_n) and then their rates, the tip last in each half.
+    pub const fn native(k: usize) -> usize {
+        let half = N / 2;
+        match k {
+            0 | 1 => half - 2 + k,
+            2 | 3 => N - 4 + k,
+            _ if k < half + 2 => k - 4,
+            _ => k - 2,
+        }
+    }
+}
+
+impl<const N: usize> OdeSystem<Const<N>> for FixedElements<'_, N> {
+    fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut native = DVector::zeros(N);
+        for k in 0..N {
+            native[Self::native(k)] = y[k];
+        }
+        let f = self.system.rhs(t, &native);
+        SVector::from_fn(|k, _| f[Self::native(k)])
+    }
+
+    fn check_range(&self, t: f64, y: &SVector<f64, N>) -> Result<(), RangeViolation> {
+        let mut native = DVector::zeros(N);
+        for k in 0..N {
+            native[Self::native(k)] = y[k];
+        }
+        self.system.check_range(t, &native)
     }
 }
 
@@ -83,6 +147,8 @@ pub struct Outcome {
 /// about a tenth of a paper run at loose tolerances).
 #[derive(Clone, Debug, Default)]
 pub struct States {
+    /// The leading states of a row that are recorded (the rest of a beam of elements').
+    width: usize,
     values: Vec<f64>,
     /// The rows' lengths, each the same for a well-formed outcome; kept so that a solver
     /// that returned a short row is caught ([`super::check_outcome`]).
@@ -91,10 +157,22 @@ pub struct States {
 
 impl States {
     pub fn with_capacity(rows: usize) -> States {
-        States { values: Vec::with_capacity(rows * 6), widths: Vec::with_capacity(rows) }
+        States {
+            width: usize::MAX,
+            values: Vec::with_capacity(rows * 6),
+            widths: Vec::with_capacity(rows),
+        }
+    }
+
+    /// Records only the first `width` states of each row pushed: the tip's four of a beam of
+    /// elements ([`FixedElements`]), which lead its state.
+    pub fn leading(mut self, width: usize) -> States {
+        self.width = width;
+        self
     }
 
     pub fn push(&mut self, row: &[f64]) {
+        let row = &row[..self.width.min(row.len())];
         // The formulations' widths copied as fixed-size arrays: a slice of a length known only
         // at run time is copied by a call to the C library's memcpy.
         match <&[f64; 4]>::try_from(row) {

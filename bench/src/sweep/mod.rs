@@ -642,7 +642,11 @@ fn judge(case: &Case, model: &BeamBody, states: Vec<[f64; 4]>, mut row: Row) -> 
 }
 
 /// RMS and maximum over the grid and the components `components` of (y − y_ref)/max|y_ref|.
-fn relative_error(ours: &[[f64; 4]], reference: &[[f64; 4]], components: &[usize]) -> (f64, f64) {
+pub(crate) fn relative_error(
+    ours: &[[f64; 4]],
+    reference: &[[f64; 4]],
+    components: &[usize],
+) -> (f64, f64) {
     let n = ours.len().min(reference.len());
     let mut sum = 0.0;
     let mut max: f64 = 0.0;
