@@ -59,9 +59,9 @@ pub fn motion(var: Var, k: &Kinematics) -> Option<f64> {
         Var::PhiApplied => k.phi.phi,
         Var::DphiApplied => k.phi.dphi,
         Var::DdphiApplied => k.phi.ddphi,
-        Var::VQuarter => k.quarter[0],
-        Var::VMid => k.quarter[1],
-        Var::VThreeQuarter => k.quarter[2],
+        Var::VQuarter => k.quarter[0][0],
+        Var::VMid => k.quarter[0][1],
+        Var::VThreeQuarter => k.quarter[0][2],
         _ => return None,
     })
 }
@@ -81,10 +81,20 @@ pub fn reaction(var: Var, r: &Reactions) -> Option<f64> {
 pub const MAX_OUTPUT_DERIVATIVE_ORDER: i32 = 2;
 
 /// The time derivative of order `order` (1 or 2) of output `var`, where the motion gives it
-/// exactly: the rates and accelerations of v1, theta1 and u2 (the accelerations from the
-/// equations of motion at the current state), and φ′, φ″ of the piece in use. `None` for the
-/// other outputs and orders.
+/// exactly: the rates and accelerations of v1, theta1, u2 and of the deflections at the
+/// quarter points (the accelerations from the equations of motion at the current state), and
+/// φ′, φ″ of the piece in use. `None` for the other outputs and orders (the reactions' and the
+/// root loads' would need the jerk).
 pub fn derivative(var: Var, order: i32, k: &Kinematics) -> Option<f64> {
+    let point = match var {
+        Var::VQuarter => Some(0),
+        Var::VMid => Some(1),
+        Var::VThreeQuarter => Some(2),
+        _ => None,
+    };
+    if let (Some(point), 1 | 2) = (point, order) {
+        return Some(k.quarter[order as usize][point]);
+    }
     Some(match (var, order) {
         (Var::V1, 1) => k.dv1,
         (Var::V1, 2) | (Var::Dv1, 1) => k.ddv1,
@@ -101,7 +111,10 @@ pub fn derivative(var: Var, order: i32, k: &Kinematics) -> Option<f64> {
 /// The outputs that have derivatives of order `order` ([`derivative`]), for error messages.
 pub fn with_derivatives(order: i32) -> &'static str {
     match order {
-        1 => "v1, theta1, u2, dv1, dtheta1, du2, phi_applied, dphi_applied",
-        _ => "v1, theta1, u2, phi_applied",
+        1 => {
+            "v1, theta1, u2, dv1, dtheta1, du2, phi_applied, dphi_applied, v_quarter, v_mid, \
+             v_three_quarter"
+        }
+        _ => "v1, theta1, u2, phi_applied, v_quarter, v_mid, v_three_quarter",
     }
 }

@@ -78,8 +78,9 @@ pub struct Kinematics {
     /// The first node's (x = l/n) deflection and slope, their rates and accelerations (the
     /// tip's with one element), for the loads at the root.
     pub node1: [f64; 6],
-    /// The deflection at x = l/4, l/2 and 3l/4 [m].
-    pub quarter: [f64; 3],
+    /// The deflection at x = l/4, l/2 and 3l/4 [m], then its rate [m/s] and acceleration
+    /// [m/s²] there: `quarter[order][point]`.
+    pub quarter: [[f64; 3]; 3],
     /// Rayleigh's (α, β) of the beam in use.
     pub rayleigh: (f64, f64),
 }
@@ -139,7 +140,7 @@ impl Kinematics {
             energy: self.energy(model),
             drift: self.drift,
             root: self.root_loads(model, &reactions),
-            quarter: self.quarter,
+            quarter: self.quarter[0],
         }
     }
 }
@@ -263,7 +264,11 @@ impl TwoDofSystem<'_> {
             drift: 0.0,
             beam_energy: None,
             node1: [q[0], q[1], qd[0], qd[1], acc[0], acc[1]],
-            quarter: quarter_points(l, q[0], q[1]),
+            quarter: [
+                quarter_points(l, q[0], q[1]),
+                quarter_points(l, qd[0], qd[1]),
+                quarter_points(l, acc[0], acc[1]),
+            ],
             rayleigh: (0.0, 0.0),
         }
     }
@@ -336,7 +341,14 @@ impl DaeSystem<'_> {
             drift: x[2] - u1(self.model.params.l, x[0], x[1]),
             beam_energy: None,
             node1: [x[0], x[1], xd[0], xd[1], acc[0], acc[1]],
-            quarter: quarter_points(self.model.params.l, x[0], x[1]),
+            quarter: {
+                let l = self.model.params.l;
+                [
+                    quarter_points(l, x[0], x[1]),
+                    quarter_points(l, xd[0], xd[1]),
+                    quarter_points(l, acc[0], acc[1]),
+                ]
+            },
             rayleigh: (0.0, 0.0),
         }
     }

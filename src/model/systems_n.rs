@@ -125,7 +125,9 @@ impl ElementsSystem<'_> {
             drift,
             beam_energy: Some(t1 + p1),
             node1: [q[0], q[1], qd[0], qd[1], acc[0], acc[1]],
-            quarter: [0.25, 0.5, 0.75].map(|f| self.model.beam.field(q, f * self.model.beam.l)[0]),
+            quarter: [q, qd, &acc[..nq]].map(|c| {
+                [0.25, 0.5, 0.75].map(|f| self.model.beam.field(c, f * self.model.beam.l)[0])
+            }),
             rayleigh: self.model.rayleigh(),
         }
     }
