@@ -18,9 +18,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 
 
+#: `--set KEY=VALUE` settings for every run (main's --set).
+SETTINGS: list = []
+
+
 def run(cli: str, n: int, t_end: float) -> tuple:
     args = [cli, "simulate", str(ROOT / "scenes" / "paper.toml"), "--elements", str(n),
             "--set", f"t_end={t_end!r}", "--set", f"dt_out={t_end!r}", "-o", "/dev/null"]
+    for setting in SETTINGS:
+        args += ["--set", setting]
     err = subprocess.run(args, capture_output=True, text=True, check=True).stderr
     steps = int(re.search(r"steps (\d+)", err).group(1))
     jacs = int(re.search(r"Jacobians (\d+)", err).group(1))
@@ -36,7 +42,10 @@ def main(argv=None) -> int:
                         "interleaved with the others'; default target/release/beam-body)")
     p.add_argument("--rounds", type=int, default=5)
     p.add_argument("--max-elements", type=int, default=32)
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="a setting for every run (repeatable), e.g. stability_guard=false")
     args = p.parse_args(argv)
+    SETTINGS[:] = args.set
     clis = args.cli or [str(ROOT / "target" / "release" / "beam-body")]
     ns = [n for n in (1, 2, 4, 8, 16, 32) if n <= args.max_elements]
     # A span per n that costs the first build about 0.5 s, from a short probe.
