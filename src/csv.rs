@@ -14,15 +14,22 @@ pub fn header(name: &str, unit: Option<&str>) -> String {
 }
 
 /// Appends `x` to `line` in the CSV's number form: std's `{:?}`, written by the `ryu` crate
-/// where the two agree. Both give the shortest digits that read back exactly; std switches to
-/// an exponent below 1e-4 where Ryū's layout waits until 1e-5 (`1e-5` against `0.00001`), and
-/// above about 1e13 a double can lie exactly halfway between two shortest forms, which the
-/// two round apart (`…268.063` against `…268.062`). Those ranges, and NaN and ±∞, go to std,
-/// so that a CSV's bytes do not depend on which path wrote them
+/// where the two agree. Both give the shortest digits that read back exactly, but
+/// - std switches to an exponent below 1e-4 where Ryū's layout waits until 1e-5 (`1e-5`
+///   against `0.00001`);
+/// - where a double lies exactly halfway between two shortest forms, std rounds the tie up and
+///   Ryū to even (`2.9802322387695313e-8`, 2⁻²⁵, against `…312e-8`). A tie needs an exact
+///   decimal expansion of 18 digits, so few significant bits: below 1e9, a significand with
+///   at least 14 trailing zero bits (m·2⁻ᵖ < 1e9 with m·5ᵖ < 1e18 needs m < 2³⁹).
+///
+/// Those ranges, the significands with 12 or more trailing zero bits, and NaN and ±∞ go to
+/// std, so that a CSV's bytes do not depend on which path wrote them
 /// (`tests::ryu_path_writes_what_std_writes`).
 pub fn push_number(line: &mut String, x: f64) {
     let a = x.abs();
-    if a < 1e-5 || (1e-4..1e9).contains(&a) {
+    let significand = (x.to_bits() & ((1 << 52) - 1)) | (1 << 52);
+    let few_bits = significand.trailing_zeros() >= 12;
+    if !few_bits && (a < 1e-5 || (1e-4..1e9).contains(&a)) {
         line.push_str(ryu::Buffer::new().format_finite(x));
     } else {
         let _ = write!(line, "{x:?}");
@@ -71,6 +78,37 @@ mod tests {
             checked += 1;
         }
         assert_eq!(checked, 4_000_000);
+        // Grids of k·2⁻ᵐ (times of a dyadic step, and the ties: 0.5 + 2⁻¹⁷, 2⁻²⁵), and every
+        // power of two.
+        for m in 0..=60 {
+            let step = crate::math::powi(2.0, -m);
+            for k in (1..200_000u64).step_by(7).chain([(1 << 16) + 1, 3 << 20]) {
+                for x in [k as f64 * step, -(k as f64) * step, 0.5 + k as f64 * step] {
+                    line.clear();
+                    push_number(&mut line, x);
+                    assert_eq!(line, format!("{x:?}"), "bits {:#x}", x.to_bits());
+                }
+            }
+        }
+        // Odd significands of 30 to 40 bits (14 to 24 trailing zeros in the double), scaled
+        // into the fast range: where ties first appear (629306376.8476563, 38 bits).
+        for bits in 30..=40u32 {
+            for _ in 0..2_000 {
+                let m = (word() >> (53 - bits)) | (1 << (bits - 1)) | 1;
+                for p in bits.saturating_sub(31)..bits + 12 {
+                    let x = m as f64 * crate::math::powi(2.0, -(p as i32));
+                    line.clear();
+                    push_number(&mut line, x);
+                    assert_eq!(line, format!("{x:?}"), "bits {:#x}", x.to_bits());
+                }
+            }
+        }
+        for e in -1074..=1023 {
+            let x = crate::math::powi(2.0, e);
+            line.clear();
+            push_number(&mut line, x);
+            assert_eq!(line, format!("{x:?}"));
+        }
         for x in [1e-5, 9.99e-5, 1e-4, 1e9, 1e-6, 0.0, -0.0, f64::NAN, f64::INFINITY, 5e-324] {
             line.clear();
             push_number(&mut line, x);

@@ -171,11 +171,22 @@ mod tests {
     use crate::model::Formulation;
 
     /// The steps `simulate_steps` reports tile [0, t_end], across the law's breakpoint and a
-    /// host's samples, and are the steps of the run `simulate` takes.
+    /// host's samples, and are the steps of the run `simulate` takes; so with
+    /// `range_check = warn` past the step that leaves the range (a body 100 times heavier
+    /// swings the beam past |ϑ1| = π/2 at 0.87 s), which the warning names.
     #[test]
     fn simulate_steps_sees_every_step_of_the_run() {
-        for phi_source in [PhiSource::Law, PhiSource::Input] {
+        use crate::model::RangeCheck;
+        let heavy = |mut s: Scene| {
+            s.params.m2 *= 100.0;
+            s.range_check = RangeCheck::Warn;
+            s
+        };
+        for (phi_source, warn) in
+            [(PhiSource::Law, false), (PhiSource::Input, false), (PhiSource::Law, true)]
+        {
             let scene = Scene { t_end: 2.0, phi_source, dt_comm: 0.1, ..Scene::default() };
+            let scene = if warn { heavy(scene) } else { scene };
             let mut ends = vec![0.0];
             let (report, result) = simulate_steps(&scene, |run, from| {
                 assert_eq!(from, *ends.last().unwrap(), "{phi_source:?}");
@@ -188,6 +199,7 @@ mod tests {
             let grid = simulate(&scene, |_| {}).unwrap();
             assert_eq!(report.stats, grid.stats, "{phi_source:?}");
             assert_eq!(ends.len() as u64 - 1, report.stats.steps, "{phi_source:?}");
+            assert_eq!(report.warning.is_some(), warn, "{:?}", report.warning);
         }
     }
 

@@ -54,6 +54,9 @@ pub struct Run {
     untested_join: bool,
     /// Within [`step_each`](Self::step_each): each advance takes one integrator step.
     single_step: bool,
+    /// The integrator's step limit per call ([`BdfConfig::max_steps`]), which
+    /// [`step_each`](Self::step_each) applies to its own calls.
+    max_steps: u64,
     bdf: Integrator,
 }
 
@@ -209,6 +212,7 @@ impl Run {
             warning: None,
             untested_join: false,
             single_step: false,
+            max_steps: options.max_steps,
             bdf,
         })
     }
@@ -332,7 +336,15 @@ impl Run {
     ) -> Result<(), SimError> {
         let (t0, piece) = (self.t(), self.piece);
         let result = self.begin(t).and_then(|()| {
+            // As `Bdf::advance` does, at most max_steps steps a call; a call that takes no
+            // step (a restart at the law's breakpoint) counts too, so the loop always ends.
+            let mut calls = 0u64;
             while self.t() < t && !math::same_time(self.t(), t, 0.0) {
+                if calls == self.max_steps {
+                    let max_steps = self.max_steps;
+                    return Err(SolverError::TooManySteps { t: self.t(), max_steps }.into());
+                }
+                calls += 1;
                 let before = self.t();
                 self.single_step = true;
                 let stepped = self.advance_to(t, t);
@@ -462,7 +474,7 @@ impl Run {
             let elements_model = self.elements.as_deref();
             let range_check = self.range != RangeCheck::Off;
             let probe = std::mem::take(&mut self.untested_join);
-            let single = self.single_step;
+            let (single, before) = (self.single_step, self.t());
             let result = match &mut self.bdf {
                 Integrator::TwoDof(b) => {
                     let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
@@ -487,6 +499,10 @@ impl Run {
                         "{e}; the run goes on outside the range of validity (range_check = warn)"
                     ));
                     self.range = RangeCheck::Off;
+                    // The step that left the range stands: in single steps, it is the one.
+                    if single && self.t() > before {
+                        return Ok(());
+                    }
                 }
                 other => return other,
             }

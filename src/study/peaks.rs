@@ -115,7 +115,7 @@ impl Peaks {
             let m = self.metrics[k];
             // residual_v1 counts from t_rot on; the law's steps end there, a host's may not.
             let a = if m == Metric::ResidualV1 { from.max(self.t_rot) } else { from };
-            if to < a || (to == a && a != from) {
+            if to < a {
                 continue;
             }
             let v1_eq = self.v1_eq;
@@ -127,6 +127,9 @@ impl Peaks {
             let eval = |t: f64| at(t).map_or(f64::NAN, |o| g(&o));
             let samples = if a == from {
                 [(from, g(&start)), (0.5 * (from + to), g(&mid)), (to, g(&end))]
+            } else if a == to {
+                // The window starts at this step's end (t_rot = t_end): one point.
+                [(to, g(&end)); 3]
             } else {
                 let c = 0.5 * (a + to);
                 [(a, eval(a)), (c, eval(c)), (to, g(&end))]
