@@ -309,14 +309,25 @@ impl Run {
         times: impl IntoIterator<Item = f64>,
         mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
     ) -> Result<(), SimError> {
-        let (t0, piece) = (self.t(), self.piece);
-        let result = self.begin(t).and_then(|()| {
+        self.interval(t, |run| {
             for tout in times {
-                self.advance_to(tout.min(t), t)?;
-                sink(self, tout)?;
+                run.advance_to(tout.min(t), t)?;
+                sink(run, tout)?;
             }
-            Ok(self.advance_to(t, t)?)
-        });
+            Ok(run.advance_to(t, t)?)
+        })
+    }
+
+    /// An interval to `t` of [`step_to_sampling`](Self::step_to_sampling) or
+    /// [`step_each`](Self::step_each): the piece from a pending sample, `body`'s steps, and on
+    /// a failure before the first step, the piece the run had.
+    fn interval(
+        &mut self,
+        t: f64,
+        body: impl FnOnce(&mut Run) -> Result<(), SimError>,
+    ) -> Result<(), SimError> {
+        let (t0, piece) = (self.t(), self.piece);
+        let result = self.begin(t).and_then(|()| body(self));
         if result.is_err() && self.t() <= t0 {
             self.piece = piece;
         }
@@ -334,33 +345,27 @@ impl Run {
         t: f64,
         mut sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
     ) -> Result<(), SimError> {
-        let (t0, piece) = (self.t(), self.piece);
-        let result = self.begin(t).and_then(|()| {
+        self.interval(t, |run| {
             // As `Bdf::advance` does, at most max_steps steps a call; a call that takes no
             // step (a restart at the law's breakpoint) counts too, so the loop always ends.
             let mut calls = 0u64;
-            while self.t() < t && !math::same_time(self.t(), t, 0.0) {
-                if calls == self.max_steps {
-                    let max_steps = self.max_steps;
-                    return Err(SolverError::TooManySteps { t: self.t(), max_steps }.into());
+            while run.t() < t && !math::same_time(run.t(), t, 0.0) {
+                if calls == run.max_steps {
+                    let max_steps = run.max_steps;
+                    return Err(SolverError::TooManySteps { t: run.t(), max_steps }.into());
                 }
                 calls += 1;
-                let before = self.t();
-                self.single_step = true;
-                let stepped = self.advance_to(t, t);
-                self.single_step = false;
+                let before = run.t();
+                run.single_step = true;
+                let stepped = run.advance_to(t, t);
+                run.single_step = false;
                 stepped?;
-                if self.t() > before {
-                    sink(self, before)?;
+                if run.t() > before {
+                    sink(run, before)?;
                 }
             }
             Ok(())
-        });
-        if result.is_err() && self.t() <= t0 {
-            self.piece = piece;
-        }
-        self.untested_join = false;
-        result
+        })
     }
 
     /// Chooses the piece for the interval to `t` from a pending sample.

@@ -16,6 +16,9 @@ use crate::sim::Run;
 /// the root's moment only if a metric needs them (the energy only at the end).
 #[derive(Clone, Copy)]
 struct Instant {
+    /// φ there: where it jumps (φ″ at the law's t_rot or at a host's sample), a step's end
+    /// is not the next one's start.
+    phi: Phi,
     v1: f64,
     theta1: f64,
     reactions: Reactions,
@@ -35,7 +38,7 @@ fn instant(run: &Run, t: f64, needs: Needs) -> Option<Instant> {
     let model = run.model();
     let reactions = if needs.reactions { k.reactions(model) } else { Reactions::default() };
     let root_moment = if needs.root { k.root_loads(model, &reactions).1 } else { 0.0 };
-    Some(Instant { v1: k.v1, theta1: k.theta1, reactions, root_moment })
+    Some(Instant { phi: k.phi, v1: k.v1, theta1: k.theta1, reactions, root_moment })
 }
 
 /// The signed output whose largest magnitude metric `m` is (`None`: the final energy).
@@ -69,10 +72,8 @@ pub(super) struct Peaks {
     peak: Vec<Option<f64>>,
     energy: f64,
     needs: Needs,
-    /// The end of the last step: its time, φ there, and the outputs.
-    last: Option<(f64, Phi, Instant)>,
-    /// Brent searches run (for the tests).
-    pub(super) refinements: u64,
+    /// The end of the last step: its time and the outputs there.
+    last: Option<(f64, Instant)>,
 }
 
 impl Peaks {
@@ -89,7 +90,6 @@ impl Peaks {
             peak: vec![None; metrics.len()],
             energy: f64::NAN,
             last: None,
-            refinements: 0,
         }
     }
 
@@ -101,9 +101,8 @@ impl Peaks {
         // The start is the last step's end, unless φ jumped there (φ″ at the law's t_rot or at
         // a host's sample): the reactions jump with it, and the last end is their left limit,
         // which the last step took.
-        let phi_from = run.piece().eval(from);
         let start = match self.last.take() {
-            Some((t, phi, o)) if t == from && phi == phi_from => Some(o),
+            Some((t, o)) if t == from && o.phi == run.piece().eval(from) => Some(o),
             _ => at(from),
         };
         let (mid, end) = (at(0.5 * (from + to)), at(to));
@@ -115,15 +114,12 @@ impl Peaks {
             let m = self.metrics[k];
             // residual_v1 counts from t_rot on; the law's steps end there, a host's may not.
             let a = if m == Metric::ResidualV1 { from.max(self.t_rot) } else { from };
-            if to < a {
+            // The final energy is taken below.
+            if to < a || m == Metric::EnergyFinal {
                 continue;
             }
             let v1_eq = self.v1_eq;
-            let Some(g) = signal(m, &start, v1_eq)
-                .map(|_| move |o: &Instant| signal(m, o, v1_eq).unwrap_or(0.0))
-            else {
-                continue; // the final energy, below
-            };
+            let g = move |o: &Instant| signal(m, o, v1_eq).unwrap_or(f64::NAN);
             let eval = |t: f64| at(t).map_or(f64::NAN, |o| g(&o));
             let samples = if a == from {
                 [(from, g(&start)), (0.5 * (from + to), g(&mid)), (to, g(&end))]
@@ -141,7 +137,7 @@ impl Peaks {
         {
             self.energy = run.outputs_at(to).map_or(f64::NAN, |o| o.energy);
         }
-        self.last = Some((to, run.piece().eval(to), end));
+        self.last = Some((to, end));
     }
 
     /// Metric `k` over a step sampled at its ends and middle: its samples, then each sign's
@@ -162,7 +158,6 @@ impl Peaks {
             if vertex <= a || vertex >= b || predicted <= best.max(so_far) {
                 continue;
             }
-            self.refinements += 1;
             let top = maximize(|t| sign * eval(t), a, b, vertex, TIME_TOL * (b - a));
             best = nan_max(best, top);
         }

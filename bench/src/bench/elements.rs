@@ -27,7 +27,7 @@ use std::time::Instant;
 
 use beam_body::model::Formulation;
 
-use super::problem::{read_scene, Outcome, Problem, DT_GRID};
+use super::problem::{on_grid, read_scene, Outcome, Problem};
 use super::{cvode, ours, shuffle};
 use crate::{cargo, project_root, relative, run_cmd, target_dir, write_text, Mode, Result};
 
@@ -70,11 +70,7 @@ fn problem() -> Result<Problem> {
     scene.params.n_elements = super::problem::ELEMENTS;
     scene.params.damping_ratio = 0.01;
     scene.formulation = Formulation::Reduced;
-    scene.dt_out = DT_GRID;
-    scene.validate()?;
-    let n = (scene.t_end / DT_GRID).round() as usize;
-    let grid = (0..=n).map(|k| if k == n { scene.t_end } else { k as f64 * DT_GRID }).collect();
-    Ok(Problem { name: "elements-8".into(), scene, grid })
+    Ok(on_grid("elements-8", scene, &path)?)
 }
 
 fn solve(solver: &str, problem: &Problem, rtol: f64) -> std::result::Result<Outcome, String> {

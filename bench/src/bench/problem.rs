@@ -94,22 +94,25 @@ impl<const N: usize> FixedElements<'_, N> {
     }
 }
 
-impl<const N: usize> OdeSystem<Const<N>> for FixedElements<'_, N> {
-    fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
+impl<const N: usize> FixedElements<'_, N> {
+    /// Our state `y` in `ElementsSystem`'s order.
+    fn to_native(y: &SVector<f64, N>) -> DVector<f64> {
         let mut native = DVector::zeros(N);
         for k in 0..N {
             native[Self::native(k)] = y[k];
         }
-        let f = self.system.rhs(t, &native);
+        native
+    }
+}
+
+impl<const N: usize> OdeSystem<Const<N>> for FixedElements<'_, N> {
+    fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
+        let f = self.system.rhs(t, &Self::to_native(y));
         SVector::from_fn(|k, _| f[Self::native(k)])
     }
 
     fn check_range(&self, t: f64, y: &SVector<f64, N>) -> Result<(), RangeViolation> {
-        let mut native = DVector::zeros(N);
-        for k in 0..N {
-            native[Self::native(k)] = y[k];
-        }
-        self.system.check_range(t, &native)
+        self.system.check_range(t, &Self::to_native(y))
     }
 }
 
@@ -218,6 +221,11 @@ pub fn problem(scene_name: &str) -> Result<Problem, String> {
     let path = project_root().join("scenes").join(file);
     let mut scene = read_scene(&path)?;
     scene.formulation = *formulation;
+    on_grid(scene_name, scene, &path)
+}
+
+/// The problem `name` of `scene` (read from `path`) on the benchmark's grid.
+pub fn on_grid(name: &str, mut scene: Scene, path: &Path) -> Result<Problem, String> {
     scene.dt_out = DT_GRID;
     let n = (scene.t_end / DT_GRID).round() as usize;
     if ((n as f64) * DT_GRID - scene.t_end).abs() > 1e-9 * scene.t_end {
@@ -229,7 +237,7 @@ pub fn problem(scene_name: &str) -> Result<Problem, String> {
     }
     let grid = (0..=n).map(|k| if k == n { scene.t_end } else { k as f64 * DT_GRID }).collect();
     scene.validate().map_err(|err| format!("{}: {err}", path.display()))?;
-    Ok(Problem { name: scene_name.to_string(), scene, grid })
+    Ok(Problem { name: name.to_string(), scene, grid })
 }
 
 /// The recorded states of a formulation, in column order (SI units).
