@@ -298,12 +298,14 @@ impl StabilityGuard {
     where
         DefaultAllocator: Allocator<D, D>,
     {
-        if self.pending && q >= 3 && h.abs() >= self.unsafe_from[3] {
+        // Only order q's own band can need the modes: the loop below stops at the first order
+        // whose band `h` is below, and the bounds' `unsafe_from` is below the modes'.
+        if self.pending && q >= 3 && h.abs() >= self.unsafe_from[q] {
             if !self.refined {
                 self.refined = true;
                 self.bound_by(refined_radius_bound(jac, SQUARINGS));
             }
-            if h.abs() >= self.unsafe_from[3] {
+            if h.abs() >= self.unsafe_from[q] {
                 self.resolve(jac);
             }
         }
@@ -492,11 +494,14 @@ mod tests {
 
         // The guard refines the bound before it computes the modes: a step with h·ρ = 0.2,
         // below BDF3's band, but h·‖J²‖^½ above it, computes none.
+        // Only the order's own band calls for them: BDF5's starts at 0.72/‖J²‖^½, above h.
         let mut g = StabilityGuard::default();
         g.update(&jac);
         let h = 0.2 / rho;
-        assert!(h * first > 0.25);
+        assert!(h * first > 0.25 && h * first < 0.72);
         assert_eq!(g.max_safe_order(5, h, &jac), 5);
+        assert!(g.pending && !g.refined);
+        assert_eq!(g.max_safe_order(3, h, &jac), 3);
         assert!(g.pending && g.refined);
         // h·ρ = 1: inside BDF4's and BDF5's bands, above BDF3's lower edge: the modes.
         assert_eq!(g.max_safe_order(5, 1.0 / rho, &jac), 2);
