@@ -91,9 +91,24 @@ impl Band {
     /// The Cholesky factor of a positive definite A; `None` if a pivot is not positive
     /// (A not positive definite) or not finite.
     pub fn cholesky(&self) -> Option<BandCholesky> {
-        let n = self.n();
-        let mut l = vec![[0.0; BAND + 1]; n];
-        for i in 0..n {
+        let mut l = vec![[0.0; BAND + 1]; self.n()];
+        self.factor_rows(&mut l, 0).then_some(BandCholesky { l })
+    }
+
+    /// [`cholesky`](Self::cholesky) from `prefix`, the factor of a matrix whose rows before
+    /// `first` are A's: row i of L depends on A's rows 0..=i only, so those rows are taken
+    /// as they are and the rest computed, bit for bit as `cholesky` would. O(n − first) but
+    /// for the copy. (For a beam whose tip block alone changes.)
+    pub fn cholesky_after(&self, prefix: &BandCholesky, first: usize) -> Option<BandCholesky> {
+        debug_assert!(prefix.l.len() == self.n() && first <= self.n());
+        let mut l = prefix.l.clone();
+        self.factor_rows(&mut l, first).then_some(BandCholesky { l })
+    }
+
+    /// Rows `first`.. of the factor into `l`, whose earlier rows hold L's; false if a pivot
+    /// is not positive or not finite.
+    fn factor_rows(&self, l: &mut [[f64; BAND + 1]], first_row: usize) -> bool {
+        for i in first_row..self.n() {
             let first = i.saturating_sub(BAND);
             for j in first..i {
                 // L_ij = (A_ij − Σ_{p=first..j−1} L_ip L_jp) / L_jj
@@ -108,11 +123,11 @@ impl Band {
                 d -= l[i][i - p] * l[i][i - p];
             }
             if !(d > 0.0 && d.is_finite()) {
-                return None;
+                return false;
             }
             l[i][0] = d.sqrt();
         }
-        Some(BandCholesky { l })
+        true
     }
 }
 
@@ -178,6 +193,15 @@ mod tests {
             assert!((a.form(&x, &y) - form).abs() <= 1e-13 * form.abs().max(1.0));
             let mut b = y.clone();
             a.cholesky().unwrap().solve_in_place(&mut b);
+            // The factor of a matrix that differs in its last two rows, from this one's.
+            if n >= 2 {
+                let mut changed = a.clone();
+                changed.add(n - 2, n - 2, 1.5);
+                changed.add(n - 1, n - 2, -0.25);
+                let full = changed.cholesky().unwrap();
+                assert_eq!(changed.cholesky_after(&a.cholesky().unwrap(), n - 2).unwrap(), full);
+                assert_ne!(changed.cholesky_after(&a.cholesky().unwrap(), n - 1).unwrap(), full);
+            }
             let want = dense.clone().lu().solve(&yv).unwrap();
             assert!((DVector::from_vec(b) - &want).norm() <= 1e-12 * want.norm(), "n = {n}");
         }

@@ -23,7 +23,7 @@
 //! q̈ is the reduced one and ü2 = −(Gq)ᵀq̈ − q̇ᵀGq̇. The linear formulation is the first-order
 //! Taylor expansion about q = q̇ = q̈ = 0 with φ kept exact, as eq. (16).
 
-use super::band::Band;
+use super::band::{Band, BandCholesky};
 use super::dynamics::BeamBody;
 use super::elements::Elements;
 use super::params::Params;
@@ -60,6 +60,10 @@ pub struct BeamBodyN {
     pub tip: BeamBody,
     /// (α, β) of D.
     rayleigh: (f64, f64),
+    /// M_b's Cholesky factor: the mass matrix B of the equations differs from M_b in the
+    /// tip's two rows only, so its factor is this one with those rows redone
+    /// ([`Band::cholesky_after`]). `None` for a massless beam (one element, `m` = 0).
+    mass_factor: Option<BandCholesky>,
 }
 
 impl BeamBodyN {
@@ -76,7 +80,9 @@ impl BeamBodyN {
             ));
         }
         let beam = Elements::new(n, params.l, params.ei, params.m);
-        let mut model = Self { params, beam, damping: None, tip, rayleigh: (alpha, beta) };
+        let mass_factor = beam.mass.cholesky();
+        let mut model =
+            Self { params, beam, damping: None, tip, rayleigh: (alpha, beta), mass_factor };
         let zeta = params.damping_ratio;
         if zeta > 0.0 {
             if alpha != 0.0 || beta != 0.0 {
@@ -211,12 +217,20 @@ impl BeamBodyN {
         Assembled { b, a, f, gq, w }
     }
 
+    /// The Cholesky factor of B, M_b changed on the tip's block.
+    fn factor(&self, b: &Band) -> Option<BandCholesky> {
+        match &self.mass_factor {
+            Some(mass) => b.cholesky_after(mass, self.beam.tip()),
+            None => b.cholesky(),
+        }
+    }
+
     /// The reduced equations' accelerations q̈ into `out`, and the tip's axial acceleration
     /// ü1. NaN if the mass matrix is not positive definite.
     pub fn reduced(&self, phi: &Phi, q: &[f64], qd: &[f64], out: &mut [f64]) -> f64 {
         let Assembled { b, a, mut f, gq, w } = self.assemble(phi, q, qd);
         let m2 = self.params.m2;
-        let Some(chol) = b.cholesky() else {
+        let Some(chol) = self.factor(&b) else {
             out.fill(f64::NAN);
             return f64::NAN;
         };
@@ -261,7 +275,7 @@ impl BeamBodyN {
                 - r * c0 * th * a0x
                 - r * s0 * th * a0y)
             + j_c * ddphi;
-        match b.cholesky() {
+        match self.factor(&b) {
             Some(chol) => {
                 chol.solve_in_place(&mut f);
                 out.copy_from_slice(&f);
