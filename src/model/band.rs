@@ -91,8 +91,8 @@ impl Band {
     /// The Cholesky factor of a positive definite A; `None` if a pivot is not positive
     /// (A not positive definite) or not finite.
     pub fn cholesky(&self) -> Option<BandCholesky> {
-        let mut l = vec![[0.0; BAND + 1]; self.n()];
-        self.factor_rows(&mut l, 0).then_some(BandCholesky { l })
+        let mut f = BandCholesky { l: vec![[0.0; BAND + 1]; self.n()], inv: vec![0.0; self.n()] };
+        self.factor_rows(&mut f, 0).then_some(f)
     }
 
     /// [`cholesky`](Self::cholesky) from `prefix`, the factor of a matrix whose rows before
@@ -101,13 +101,14 @@ impl Band {
     /// for the copy. (For a beam whose tip block alone changes.)
     pub fn cholesky_after(&self, prefix: &BandCholesky, first: usize) -> Option<BandCholesky> {
         debug_assert!(prefix.l.len() == self.n() && first <= self.n());
-        let mut l = prefix.l.clone();
-        self.factor_rows(&mut l, first).then_some(BandCholesky { l })
+        let mut f = prefix.clone();
+        self.factor_rows(&mut f, first).then_some(f)
     }
 
     /// Rows `first`.. of the factor into `l`, whose earlier rows hold L's; false if a pivot
     /// is not positive or not finite.
-    fn factor_rows(&self, l: &mut [[f64; BAND + 1]], first_row: usize) -> bool {
+    fn factor_rows(&self, f: &mut BandCholesky, first_row: usize) -> bool {
+        let l = &mut f.l;
         for i in first_row..self.n() {
             let first = i.saturating_sub(BAND);
             for j in first..i {
@@ -126,6 +127,7 @@ impl Band {
                 return false;
             }
             l[i][0] = d.sqrt();
+            f.inv[i] = 1.0 / l[i][0];
         }
         true
     }
@@ -135,6 +137,9 @@ impl Band {
 #[derive(Clone, Debug, PartialEq)]
 pub struct BandCholesky {
     l: Vec<[f64; BAND + 1]>,
+    /// 1/L_ii: the substitutions multiply, as a division on their chain of dependent rows
+    /// costs several times a multiplication's latency.
+    inv: Vec<f64>,
 }
 
 #[allow(clippy::needless_range_loop)]
@@ -147,14 +152,39 @@ impl BandCholesky {
             for p in i.saturating_sub(BAND)..i {
                 s -= self.l[i][i - p] * b[p];
             }
-            b[i] = s / self.l[i][0];
+            b[i] = s * self.inv[i];
         }
         for i in (0..n).rev() {
             let mut s = b[i];
             for p in i + 1..n.min(i + BAND + 1) {
                 s -= self.l[p][p - i] * b[p];
             }
-            b[i] = s / self.l[i][0];
+            b[i] = s * self.inv[i];
+        }
+    }
+
+    /// [`solve_in_place`](Self::solve_in_place) for two right-hand sides at once, each as
+    /// that solves it: the two chains of dependent rows interleave.
+    pub fn solve2_in_place(&self, b: &mut [f64], c: &mut [f64]) {
+        let n = self.l.len();
+        debug_assert!(b.len() == n && c.len() == n);
+        for i in 0..n {
+            let (mut s, mut t) = (b[i], c[i]);
+            for p in i.saturating_sub(BAND)..i {
+                s -= self.l[i][i - p] * b[p];
+                t -= self.l[i][i - p] * c[p];
+            }
+            b[i] = s * self.inv[i];
+            c[i] = t * self.inv[i];
+        }
+        for i in (0..n).rev() {
+            let (mut s, mut t) = (b[i], c[i]);
+            for p in i + 1..n.min(i + BAND + 1) {
+                s -= self.l[p][p - i] * b[p];
+                t -= self.l[p][p - i] * c[p];
+            }
+            b[i] = s * self.inv[i];
+            c[i] = t * self.inv[i];
         }
     }
 }
@@ -193,6 +223,11 @@ mod tests {
             assert!((a.form(&x, &y) - form).abs() <= 1e-13 * form.abs().max(1.0));
             let mut b = y.clone();
             a.cholesky().unwrap().solve_in_place(&mut b);
+            let (mut b2, mut x2) = (y.clone(), x.clone());
+            a.cholesky().unwrap().solve2_in_place(&mut b2, &mut x2);
+            let mut x1 = x.clone();
+            a.cholesky().unwrap().solve_in_place(&mut x1);
+            assert_eq!((&b2, &x2), (&b, &x1));
             // The factor of a matrix that differs in its last two rows, from this one's.
             if n >= 2 {
                 let mut changed = a.clone();

@@ -234,9 +234,8 @@ impl BeamBodyN {
             out.fill(f64::NAN);
             return f64::NAN;
         };
-        chol.solve_in_place(&mut f);
         let mut z = a.clone();
-        chol.solve_in_place(&mut z);
+        chol.solve2_in_place(&mut f, &mut z);
         // (B + M2 a aᵀ)⁻¹F = x − z (M2 aᵀx) / (1 + M2 aᵀz)
         let k = m2 * dot(&a, &f) / (1.0 + m2 * dot(&a, &z));
         for ((o, x), z) in out.iter_mut().zip(&f).zip(&z) {

@@ -21,6 +21,8 @@ pub struct GenBand {
 pub struct BandLu {
     lu: GenBand,
     perm: Vec<usize>,
+    /// 1/U_kk.
+    inv_pivot: Vec<f64>,
 }
 
 #[allow(clippy::needless_range_loop)]
@@ -122,7 +124,10 @@ impl GenBand {
                 }
             }
         }
-        a.is_finite().then_some(BandLu { lu: a, perm })
+        // The pivots' reciprocals: the back substitution multiplies (a division on its
+        // chain of dependent rows costs several times a multiplication's latency).
+        let inv_pivot = (0..n).map(|k| 1.0 / a.rows[k][P]).collect();
+        a.is_finite().then_some(BandLu { lu: a, perm, inv_pivot })
     }
 }
 
@@ -151,7 +156,7 @@ impl BandLu {
             for j in k + 1..=right {
                 s -= a.rows[k][j + P - k] * b[j];
             }
-            b[k] = s / a.rows[k][P];
+            b[k] = s * self.inv_pivot[k];
         }
     }
 }
