@@ -65,6 +65,11 @@ const NEWTON_COEF: f64 = 0.1;
 const REFACTOR_STEPS: u64 = 20;
 const REFACTOR_GAMMA_RATIO: f64 = 0.3;
 const REJAC_STEPS: u64 = 51;
+/// MSBJ for a Jacobian in parts (`OdeSystem::second_order`, n elements): with it the guard
+/// takes the eigenvalues of the dense J, O(N³) against the O(N) of a step, and the Newton
+/// iteration's own tests ask for a fresh J when the old one stops converging (CVODE lets a
+/// user set MSBJ, `CVodeSetJacEvalFrequency`, for the same trade).
+const REJAC_STEPS_STRUCTURED: u64 = 200;
 const REJAC_GAMMA_RATIO: f64 = 0.2;
 /// Floor of the finite-difference increment, in units of h·ε·N·‖f‖ (CVODE's MIN_INC_MULT).
 const FD_MIN_INC_MULT: f64 = 1000.0;

@@ -23,7 +23,7 @@ where
             let mut fresh_jac = false;
             if needs_setup {
                 fresh_jac = !self.jac_valid
-                    || self.stats.steps >= self.steps_at_jac + REJAC_STEPS
+                    || self.stats.steps >= self.steps_at_jac + self.rejac_steps()
                     || conv_fail == ConvFail::Other
                     || (conv_fail == ConvFail::BadJacobian
                         && (gamma_ratio - 1.0).abs() < REJAC_GAMMA_RATIO);
@@ -38,6 +38,15 @@ where
                 Err(NewtonFail::NonFinite) if !fresh_jac => conv_fail = ConvFail::Other,
                 Err(e) => return Err(e),
             }
+        }
+    }
+
+    /// Steps after which J is evaluated again, at the latest.
+    fn rejac_steps(&self) -> u64 {
+        if self.structure.is_some() {
+            REJAC_STEPS_STRUCTURED
+        } else {
+            REJAC_STEPS
         }
     }
 
