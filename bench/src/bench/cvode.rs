@@ -129,6 +129,8 @@ struct Api {
     set_user_data: unsafe extern "C" fn(CvodeMem, *mut c_void) -> c_int,
     set_max_num_steps: unsafe extern "C" fn(CvodeMem, c_long) -> c_int,
     set_stop_time: unsafe extern "C" fn(CvodeMem, f64) -> c_int,
+    /// `CVodeSetJacEvalFrequency` (cvode_ls.h, SUNDIALS ≥ 5): MSBJ, steps between Jacobians.
+    set_jac_eval_frequency: unsafe extern "C" fn(CvodeMem, c_long) -> c_int,
     /// SUNDIALS 6 only.
     set_err_handler_fn: Option<SetErrHandler>,
     /// SUNDIALS 7 only, as `clear_err_handlers`.
@@ -240,6 +242,7 @@ impl Api {
                 set_user_data: sym!("CVodeSetUserData")?,
                 set_max_num_steps: sym!("CVodeSetMaxNumSteps")?,
                 set_stop_time: sym!("CVodeSetStopTime")?,
+                set_jac_eval_frequency: sym!("CVodeSetJacEvalFrequency")?,
                 set_err_handler_fn,
                 push_err_handler,
                 clear_err_handlers,
@@ -278,9 +281,18 @@ pub fn describe() -> Result<String, String> {
 
 /// Solves `problem` with CVODE's BDF at `rtol`, atol = 1e-3·rtol for every state.
 pub fn run(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
+    run_with_jac_every(problem, rtol, None)
+}
+
+/// [`run`] with a Jacobian at the latest every `msbj` steps (CVODE's default 51 if `None`).
+pub fn run_with_jac_every(
+    problem: &Problem,
+    rtol: f64,
+    msbj: Option<c_long>,
+) -> Result<Outcome, String> {
     let api = api()?;
     let model = problem.scene.validate().map_err(|err| err.to_string())?;
-    with_system(&problem.scene, &model, Cvode { api, problem, rtol })
+    with_system(&problem.scene, &model, Cvode { api, problem, rtol, msbj })
 }
 
 /// [`solve`] with its arguments, for [`with_system`].
@@ -288,6 +300,7 @@ struct Cvode<'a> {
     api: &'a Api,
     problem: &'a Problem,
     rtol: f64,
+    msbj: Option<c_long>,
 }
 
 impl WithSystem for Cvode<'_> {
@@ -297,7 +310,7 @@ impl WithSystem for Cvode<'_> {
         S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S,
     {
-        solve(self.api, self.problem, self.rtol, system, y0)
+        solve(self.api, self.problem, self.rtol, self.msbj, system, y0)
     }
 }
 
@@ -554,6 +567,7 @@ fn solve<S, const N: usize>(
     api: &Api,
     problem: &Problem,
     rtol: f64,
+    msbj: Option<c_long>,
     system: impl Fn(PhiPiece) -> S,
     y0: SVector<f64, N>,
 ) -> Result<Outcome, String>
@@ -631,6 +645,10 @@ where
         let max_steps = c_long::try_from(beam_body::solver::BdfConfig::default().max_steps)
             .unwrap_or(c_long::MAX);
         s.check((api.set_max_num_steps)(s.mem, max_steps), "CVodeSetMaxNumSteps", &log)?;
+        if let Some(msbj) = msbj {
+            let set = api.set_jac_eval_frequency;
+            s.check(set(s.mem, msbj), "CVodeSetJacEvalFrequency", &log)?;
+        }
         if projecting {
             s.check((api.set_proj_fn)(s.mem, project::<S, N>), "CVodeSetProjFn", &log)?;
         }
