@@ -111,8 +111,8 @@ Commands:
           against n = 32 at 1e-8 on four scenes (the paper's, phi_end = 0.3, M2 = 1 kg,
           t_rot = 3 s); model, integration and total errors of v1, theta1 and the
           metrics; run times; the fast turn's perturbation growth. Writes
-          docs/model_error.{md,png} (runs cached in target/model_error/runs/; about an
-          hour on 2 cores from scratch). --quick: 2 s of two scenes, n = 1, 2 against
+          docs/model_error.{md,png} (runs cached in target/model_error/runs/; about 6
+          minutes on 2 cores from scratch). --quick: 2 s of two scenes, n = 1, 2 against
           n = 4, into target/model_error/ (the test suite's smoke test).
   bench-study [--quick]
           Throughput of the study runners side by side (bench/python/bench_study.py):
