@@ -95,42 +95,52 @@ impl Band {
         self.factor_rows(&mut f, 0).then_some(f)
     }
 
-    /// [`cholesky`](Self::cholesky) from `prefix`, the factor of a matrix whose rows before
-    /// `first` are A's: row i of L depends on A's rows 0..=i only, so those rows are taken
-    /// as they are and the rest computed, bit for bit as `cholesky` would. O(n − first) but
-    /// for the copy. (For a beam whose tip block alone changes.)
-    pub fn cholesky_after(&self, prefix: &BandCholesky, first: usize) -> Option<BandCholesky> {
-        debug_assert!(prefix.l.len() == self.n() && first <= self.n());
-        let mut f = prefix.clone();
-        self.factor_rows(&mut f, first).then_some(f)
+    /// Row i of A's lower band.
+    pub fn row(&self, i: usize) -> [f64; BAND + 1] {
+        self.rows[i]
     }
 
-    /// Rows `first`.. of the factor into `l`, whose earlier rows hold L's; false if a pivot
+    /// Rows `first`.. of the factor into `f`, whose earlier rows hold L's; false if a pivot
     /// is not positive or not finite.
     fn factor_rows(&self, f: &mut BandCholesky, first_row: usize) -> bool {
-        let l = &mut f.l;
         for i in first_row..self.n() {
-            let first = i.saturating_sub(BAND);
-            for j in first..i {
-                // L_ij = (A_ij − Σ_{p=first..j−1} L_ip L_jp) / L_jj
-                let mut s = self.rows[i][i - j];
-                for p in first..j {
-                    s -= l[i][i - p] * l[j][j - p];
-                }
-                l[i][i - j] = s / l[j][0];
-            }
-            let mut d = self.rows[i][0];
-            for p in first..i {
-                d -= l[i][i - p] * l[i][i - p];
-            }
-            if !(d > 0.0 && d.is_finite()) {
+            let Some(row) = factor_row(&self.rows[i], i, |j| f.l[j]) else {
                 return false;
-            }
-            l[i][0] = d.sqrt();
-            f.inv[i] = 1.0 / l[i][0];
+            };
+            f.l[i] = row;
+            f.inv[i] = 1.0 / row[0];
         }
         true
     }
+}
+
+/// Row i of the Cholesky factor L of A from A's row i (`a`, its lower band) and L's rows
+/// before it (`l(j)`, j < i): L_ij = (A_ij − Σ_p L_ip L_jp) / L_jj and L_ii = √(A_ii − Σ_p
+/// L_ip²) (Golub & Van Loan, alg. 4.3.5). `None` if the pivot is not positive or not finite.
+fn factor_row(
+    a: &[f64; BAND + 1],
+    i: usize,
+    l: impl Fn(usize) -> [f64; BAND + 1],
+) -> Option<[f64; BAND + 1]> {
+    let first = i.saturating_sub(BAND);
+    let mut row = [0.0; BAND + 1];
+    for j in first..i {
+        let lj = l(j);
+        let mut s = a[i - j];
+        for p in first..j {
+            s -= row[i - p] * lj[j - p];
+        }
+        row[i - j] = s / lj[0];
+    }
+    let mut d = a[0];
+    for p in first..i {
+        d -= row[i - p] * row[i - p];
+    }
+    if !(d > 0.0 && d.is_finite()) {
+        return None;
+    }
+    row[0] = d.sqrt();
+    Some(row)
 }
 
 /// The factor L of A = L Lᵀ, banded as A.
@@ -142,50 +152,102 @@ pub struct BandCholesky {
     inv: Vec<f64>,
 }
 
-#[allow(clippy::needless_range_loop)]
 impl BandCholesky {
     /// Solves A x = b in place (`b` becomes x).
     pub fn solve_in_place(&self, b: &mut [f64]) {
-        let n = self.l.len();
-        for i in 0..n {
-            let mut s = b[i];
-            for p in i.saturating_sub(BAND)..i {
-                s -= self.l[i][i - p] * b[p];
-            }
-            b[i] = s * self.inv[i];
-        }
-        for i in (0..n).rev() {
-            let mut s = b[i];
-            for p in i + 1..n.min(i + BAND + 1) {
-                s -= self.l[p][p - i] * b[p];
-            }
-            b[i] = s * self.inv[i];
-        }
+        substitute(self.l.len(), |i| (&self.l[i], self.inv[i]), [b]);
     }
 
     /// [`solve_in_place`](Self::solve_in_place) for two right-hand sides at once, each as
     /// that solves it: the two chains of dependent rows interleave.
     pub fn solve2_in_place(&self, b: &mut [f64], c: &mut [f64]) {
+        substitute(self.l.len(), |i| (&self.l[i], self.inv[i]), [b, c]);
+    }
+}
+
+/// Solves L Lᵀ x = b in place for each of the K right-hand sides `bs`, L's row i and 1/L_ii
+/// given by `row(i)`: forward, then back substitution. The K chains of dependent rows are
+/// independent and interleave (a chain's row waits on the latency of the one before).
+fn substitute<'r, const K: usize>(
+    n: usize,
+    row: impl Fn(usize) -> (&'r [f64; BAND + 1], f64),
+    mut bs: [&mut [f64]; K],
+) {
+    debug_assert!(bs.iter().all(|b| b.len() == n));
+    for i in 0..n {
+        let (li, inv) = row(i);
+        let mut s: [f64; K] = std::array::from_fn(|k| bs[k][i]);
+        for p in i.saturating_sub(BAND)..i {
+            for (s, b) in s.iter_mut().zip(bs.iter()) {
+                *s -= li[i - p] * b[p];
+            }
+        }
+        for (s, b) in s.iter().zip(bs.iter_mut()) {
+            b[i] = s * inv;
+        }
+    }
+    for i in (0..n).rev() {
+        let mut s: [f64; K] = std::array::from_fn(|k| bs[k][i]);
+        for p in i + 1..n.min(i + BAND + 1) {
+            let lp = row(p).0;
+            for (s, b) in s.iter_mut().zip(bs.iter()) {
+                *s -= lp[p - i] * b[p];
+            }
+        }
+        let inv = row(i).1;
+        for (s, b) in s.iter().zip(bs.iter_mut()) {
+            b[i] = s * inv;
+        }
+    }
+}
+
+impl BandCholesky {
+    /// The factor of A + E from A's, `self`, where E lives in the last two rows and columns
+    /// only: `last` are those two rows of A + E (lower band). Row i of L depends on A's rows
+    /// 0..=i alone, so L's other rows are A's and only these two are computed, bit for bit as
+    /// [`Band::cholesky`] of A + E would. No allocation. `None` if A + E is not positive
+    /// definite there (or A has fewer than two rows).
+    pub fn with_last_rows(&self, last: [[f64; BAND + 1]; 2]) -> Option<TailCholesky<'_>> {
         let n = self.l.len();
-        debug_assert!(b.len() == n && c.len() == n);
-        for i in 0..n {
-            let (mut s, mut t) = (b[i], c[i]);
-            for p in i.saturating_sub(BAND)..i {
-                s -= self.l[i][i - p] * b[p];
-                t -= self.l[i][i - p] * c[p];
-            }
-            b[i] = s * self.inv[i];
-            c[i] = t * self.inv[i];
+        if n < 2 {
+            return None;
         }
-        for i in (0..n).rev() {
-            let (mut s, mut t) = (b[i], c[i]);
-            for p in i + 1..n.min(i + BAND + 1) {
-                s -= self.l[p][p - i] * b[p];
-                t -= self.l[p][p - i] * c[p];
-            }
-            b[i] = s * self.inv[i];
-            c[i] = t * self.inv[i];
+        let second = factor_row(&last[0], n - 2, |j| self.l[j])?;
+        let end = factor_row(&last[1], n - 1, |j| if j == n - 2 { second } else { self.l[j] })?;
+        Some(TailCholesky { head: self, tail: [second, end], inv: [1.0 / second[0], 1.0 / end[0]] })
+    }
+}
+
+/// A Cholesky factor whose last two rows replace those of another's
+/// ([`BandCholesky::with_last_rows`]).
+pub struct TailCholesky<'a> {
+    head: &'a BandCholesky,
+    tail: [[f64; BAND + 1]; 2],
+    inv: [f64; 2],
+}
+
+impl TailCholesky<'_> {
+    /// Row i of L and 1/L_ii.
+    #[inline]
+    fn row(&self, i: usize) -> (&[f64; BAND + 1], f64) {
+        let n = self.head.l.len();
+        if i + 2 >= n {
+            let k = i + 2 - n;
+            (&self.tail[k], self.inv[k])
+        } else {
+            (&self.head.l[i], self.head.inv[i])
         }
+    }
+
+    /// Solves (A + E) x = b in place, as [`BandCholesky::solve_in_place`] would with the
+    /// full factor.
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        substitute(self.head.l.len(), |i| self.row(i), [b]);
+    }
+
+    /// Solves (A + E) x = b and (A + E) y = c in place, the two chains interleaved.
+    pub fn solve2_in_place(&self, b: &mut [f64], c: &mut [f64]) {
+        substitute(self.head.l.len(), |i| self.row(i), [b, c]);
     }
 }
 
@@ -233,12 +295,16 @@ mod tests {
                 let mut changed = a.clone();
                 changed.add(n - 2, n - 2, 1.5);
                 changed.add(n - 1, n - 2, -0.25);
+                changed.add(n - 1, n - 1, 0.75);
                 let full = changed.cholesky().unwrap();
-                assert_eq!(changed.cholesky_after(&a.cholesky().unwrap(), n - 2).unwrap(), full);
-                assert_ne!(changed.cholesky_after(&a.cholesky().unwrap(), n - 1).unwrap(), full);
+                let base = a.cholesky().unwrap();
+                let tail = base.with_last_rows([changed.row(n - 2), changed.row(n - 1)]).unwrap();
+                let (mut u, mut v) = (y.clone(), x.clone());
+                tail.solve2_in_place(&mut u, &mut v);
+                let (mut u_full, mut v_full) = (y.clone(), x.clone());
+                full.solve2_in_place(&mut u_full, &mut v_full);
+                assert_eq!((u, v), (u_full, v_full), "n = {n}");
             }
-            let want = dense.clone().lu().solve(&yv).unwrap();
-            assert!((DVector::from_vec(b) - &want).norm() <= 1e-12 * want.norm(), "n = {n}");
         }
     }
 

@@ -34,14 +34,15 @@ use nalgebra::{DMatrix, DVector};
 /// The most elements: the beam's highest frequency grows as n², and 32 elements resolve the
 /// first modes far beyond the model's other approximations.
 pub const MAX_ELEMENTS: usize = 32;
+/// The most coordinates, for the right-hand side's buffers on the stack.
+const MAX_DOFS: usize = 2 * MAX_ELEMENTS;
 
 /// M q̈ = F in parts: M = B + M2·a aᵀ.
 struct Assembled {
-    b: Band,
+    /// The body's entries (t, t), (t + 1, t), (t + 1, t + 1) of B beyond M_b's.
+    tip: [f64; 3],
     a: Vec<f64>,
     f: Vec<f64>,
-    gq: Vec<f64>,
-    w: f64,
 }
 
 fn dot(u: &[f64], v: &[f64]) -> f64 {
@@ -62,7 +63,8 @@ pub struct BeamBodyN {
     rayleigh: (f64, f64),
     /// M_b's Cholesky factor: the mass matrix B of the equations differs from M_b in the
     /// tip's two rows only, so its factor is this one with those rows redone
-    /// ([`Band::cholesky_after`]). `None` for a massless beam (one element, `m` = 0).
+    /// ([`BandCholesky::with_last_rows`]). `None` for a massless beam (one element, `m` =
+    /// 0).
     mass_factor: Option<BandCholesky>,
 }
 
@@ -166,11 +168,6 @@ impl BeamBodyN {
         self.beam.dofs()
     }
 
-    /// Gq and q̇ᵀGq̇.
-    fn shortening(&self, q: &[f64], qd: &[f64]) -> (Vec<f64>, f64) {
-        (self.beam.g.mul(q), self.beam.g.form(qd, qd))
-    }
-
     /// The tip's axial displacement u1 = −½qᵀGq and its rate −(Gq)ᵀq̇.
     pub fn u1(&self, q: &[f64], qd: &[f64]) -> (f64, f64) {
         let gq = self.beam.g.mul(q);
@@ -179,69 +176,122 @@ impl BeamBodyN {
         (-0.5 * u, -dot)
     }
 
-    /// −K q − D q̇.
-    fn elastic(&self, q: &[f64], qd: &[f64]) -> Vec<f64> {
-        let mut f = self.beam.stiffness.mul(q);
+    /// −K q − D q̇ into `f`.
+    fn elastic_into(&self, q: &[f64], qd: &[f64], f: &mut [f64]) {
+        self.beam.stiffness.mul_into(q, f);
         if let Some(d) = &self.damping {
-            let dq = d.mul(qd);
-            f.iter_mut().zip(dq).for_each(|(f, d)| *f += d);
+            let mut dq = [0.0; MAX_DOFS];
+            let dq = &mut dq[..qd.len()];
+            d.mul_into(qd, dq);
+            f.iter_mut().zip(dq.iter()).for_each(|(f, d)| *f += d);
         }
         f.iter_mut().for_each(|f| *f = -*f);
-        f
     }
 
-    /// The reduced equations M q̈ = F at (q, q̇): M as the banded B and the rank-one
-    /// M2·a aᵀ (the module's notes), F, and q̇ᵀGq̇ and Gq for the axial acceleration.
-    fn assemble(&self, phi: &Phi, q: &[f64], qd: &[f64]) -> Assembled {
+    /// The reduced equations M q̈ = F at (q, q̇), into the caller's buffers: Gq into `gq`,
+    /// a into `a` and F into `f`; returns the body's tip block of B ([`solve_b`]) and
+    /// q̇ᵀGq̇. M is B plus the rank-one M2·a aᵀ (the module's notes).
+    ///
+    /// [`solve_b`]: Self::solve_b
+    fn assemble_into(
+        &self,
+        phi: &Phi,
+        q: &[f64],
+        qd: &[f64],
+        gq: &mut [f64],
+        a: &mut [f64],
+        f: &mut [f64],
+    ) -> ([f64; 3], f64) {
         let Params { m2, j_c, r, g: grav, .. } = self.params;
         let t = self.beam.tip();
         let (s, c) = math::sin_cos(q[t + 1] + phi.phi);
         let dth = qd[t + 1] + phi.dphi;
-        let (gq, w) = self.shortening(q, qd);
+        self.beam.g.mul_into(q, gq);
+        let w = self.beam.g.form(qd, qd);
         let ax = -w - r * c * dth * dth - r * s * phi.ddphi - grav;
         let ay = -r * s * dth * dth + r * c * phi.ddphi;
         // B = M_b + M2 A_yA_yᵀ + J_C e_ϑe_ϑᵀ on the tip's block.
-        let mut b = self.beam.mass.clone();
-        b.add(t, t, m2);
-        b.add(t + 1, t, m2 * r * c);
-        b.add(t + 1, t + 1, m2 * r * r * c * c + j_c);
+        let tip = [m2, m2 * r * c, m2 * r * r * c * c + j_c];
         // F = −Kq − Dq̇ − M2 (A_x a_x + A_y a_y) − J_C φ″ e_ϑ, with A_x = −a.
-        let mut a = gq.clone();
+        a.copy_from_slice(gq);
         a[t + 1] += r * s;
-        let mut f = self.elastic(q, qd);
-        for (f, a) in f.iter_mut().zip(&a) {
+        self.elastic_into(q, qd, f);
+        for (f, a) in f.iter_mut().zip(a.iter()) {
             *f += m2 * a * ax;
         }
         f[t] -= m2 * ay;
         f[t + 1] -= m2 * r * c * ay + j_c * phi.ddphi;
-        Assembled { b, a, f, gq, w }
+        (tip, w)
     }
 
-    /// The Cholesky factor of B, M_b changed on the tip's block.
-    fn factor(&self, b: &Band) -> Option<BandCholesky> {
-        match &self.mass_factor {
-            Some(mass) => b.cholesky_after(mass, self.beam.tip()),
-            None => b.cholesky(),
+    /// [`assemble_into`](Self::assemble_into) into new vectors (off the integrator's path).
+    fn assemble(&self, phi: &Phi, q: &[f64], qd: &[f64]) -> Assembled {
+        let n = q.len();
+        let (mut gq, mut a, mut f) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let (tip, _) = self.assemble_into(phi, q, qd, &mut gq, &mut a, &mut f);
+        Assembled { tip, a, f }
+    }
+
+    /// B = M_b with the body's `tip` entries added at (t, t), (t + 1, t), (t + 1, t + 1).
+    fn tip_band(&self, tip: [f64; 3]) -> Band {
+        let t = self.beam.tip();
+        let mut b = self.beam.mass.clone();
+        b.add(t, t, tip[0]);
+        b.add(t + 1, t, tip[1]);
+        b.add(t + 1, t + 1, tip[2]);
+        b
+    }
+
+    /// Solves B x = f in place, and B z = a too if `a` is given, B = [`tip_band`](Self::tip_band)
+    /// (`tip`). The tip's rows are the last two, so B's factor is M_b's with those two redone
+    /// ([`BandCholesky::with_last_rows`], no allocation), bit for bit B's own. False if B is
+    /// not positive definite.
+    fn solve_b(&self, tip: [f64; 3], f: &mut [f64], a: Option<&mut [f64]>) -> bool {
+        let t = self.beam.tip();
+        debug_assert_eq!(t + 2, f.len());
+        if let Some(mass) = &self.mass_factor {
+            let (mut last, mut end) = (self.beam.mass.row(t), self.beam.mass.row(t + 1));
+            last[0] += tip[0];
+            end[1] += tip[1];
+            end[0] += tip[2];
+            let Some(chol) = mass.with_last_rows([last, end]) else {
+                return false;
+            };
+            match a {
+                Some(a) => chol.solve2_in_place(f, a),
+                None => chol.solve_in_place(f),
+            }
+            return true;
         }
+        let Some(chol) = self.tip_band(tip).cholesky() else {
+            return false;
+        };
+        match a {
+            Some(a) => chol.solve2_in_place(f, a),
+            None => chol.solve_in_place(f),
+        }
+        true
     }
 
     /// The reduced equations' accelerations q̈ into `out`, and the tip's axial acceleration
-    /// ü1. NaN if the mass matrix is not positive definite.
+    /// ü1. NaN if the mass matrix is not positive definite. No allocation.
     pub fn reduced(&self, phi: &Phi, q: &[f64], qd: &[f64], out: &mut [f64]) -> f64 {
-        let Assembled { b, a, mut f, gq, w } = self.assemble(phi, q, qd);
-        let m2 = self.params.m2;
-        let Some(chol) = self.factor(&b) else {
+        let n = q.len();
+        let (mut gq, mut a, mut z) = ([0.0; MAX_DOFS], [0.0; MAX_DOFS], [0.0; MAX_DOFS]);
+        let (gq, a, z) = (&mut gq[..n], &mut a[..n], &mut z[..n]);
+        let (tip, w) = self.assemble_into(phi, q, qd, gq, a, out);
+        z.copy_from_slice(a);
+        if !self.solve_b(tip, out, Some(z)) {
             out.fill(f64::NAN);
             return f64::NAN;
-        };
-        let mut z = a.clone();
-        chol.solve2_in_place(&mut f, &mut z);
-        // (B + M2 a aᵀ)⁻¹F = x − z (M2 aᵀx) / (1 + M2 aᵀz)
-        let k = m2 * dot(&a, &f) / (1.0 + m2 * dot(&a, &z));
-        for ((o, x), z) in out.iter_mut().zip(&f).zip(&z) {
-            *o = x - z * k;
         }
-        -dot(&gq, out) - w
+        // (B + M2 a aᵀ)⁻¹F = x − z (M2 aᵀx) / (1 + M2 aᵀz)
+        let m2 = self.params.m2;
+        let k = m2 * dot(a, out) / (1.0 + m2 * dot(a, z));
+        for (o, z) in out.iter_mut().zip(z.iter()) {
+            *o -= z * k;
+        }
+        -dot(gq, out) - w
     }
 
     /// The linear equations' accelerations (eq. 16 generalised) into `out`. NaN if the mass
@@ -257,15 +307,15 @@ impl BeamBodyN {
             (-r * c0 * w * w - r * s0 * ddphi - grav, -r * s0 * w * w + r * c0 * ddphi);
         let dax = r * s0 * w * w * th - 2.0 * r * c0 * w * dth - r * c0 * ddphi * th;
         let day = -r * c0 * w * w * th - 2.0 * r * s0 * w * dth - r * s0 * ddphi * th;
-        let mut b = self.beam.mass.clone();
-        b.add(t, t, m2);
-        b.add(t + 1, t, m2 * r * c0);
-        b.add(t + 1, t + 1, m2 * r * r + j_c);
+        let tip = [m2, m2 * r * c0, m2 * r * r + j_c];
         // −M2 [A0ᵀ(a0 + da) + dAᵀ a0], A0_x = −r s0 e_ϑ, A0_y = e_v + r c0 e_ϑ,
         // dA_x = −Gq − r c0 ϑ e_ϑ, dA_y = −r s0 ϑ e_ϑ.
-        let gq = self.beam.g.mul(q);
-        let mut f = self.elastic(q, qd);
-        for (f, g) in f.iter_mut().zip(&gq) {
+        let mut gq = [0.0; MAX_DOFS];
+        let gq = &mut gq[..q.len()];
+        self.beam.g.mul_into(q, gq);
+        let f = out;
+        self.elastic_into(q, qd, f);
+        for (f, g) in f.iter_mut().zip(gq.iter()) {
             *f += m2 * g * a0x;
         }
         f[t] -= m2 * (a0y + day);
@@ -274,12 +324,8 @@ impl BeamBodyN {
                 - r * c0 * th * a0x
                 - r * s0 * th * a0y)
             + j_c * ddphi;
-        match self.factor(&b) {
-            Some(chol) => {
-                chol.solve_in_place(&mut f);
-                out.copy_from_slice(&f);
-            }
-            None => out.fill(f64::NAN),
+        if !self.solve_b(tip, f, None) {
+            f.fill(f64::NAN);
         }
     }
 
@@ -364,7 +410,8 @@ impl BeamBodyN {
         let q = self.equilibrium(phi_fixed, false)?;
         let held = Phi { phi: phi_fixed, ..Phi::default() };
         let zero = vec![0.0; q.len()];
-        let Assembled { b, a, .. } = self.assemble(&held, q.as_slice(), &zero);
+        let Assembled { tip, a, .. } = self.assemble(&held, q.as_slice(), &zero);
+        let b = self.tip_band(tip);
         let n = q.len();
         let m2 = self.params.m2;
         let mass = DMatrix::from_fn(n, n, |i, j| b.get(i, j) + m2 * a[i] * a[j]);
