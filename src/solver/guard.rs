@@ -64,6 +64,13 @@ const MAX_MODES: usize = 8;
 /// not help them and they are ignored.
 const MAX_ANGLE_DEG: f64 = 95.0;
 
+/// A step with h·ρ_last at or above this many times its order's lower band edge, ρ_last the
+/// largest |λ| of the last Jacobian's stored modes, takes the modes without trying the bounds
+/// first: every bound is ≥ ρ ≥ ρ_last had J not changed, and the modes move little from one
+/// Jacobian to the next, so the bounds would not keep the step out of the band. Only the work
+/// depends on it, not the order chosen.
+const SKIP_BOUNDS_FROM: f64 = 1.5;
+
 /// Squarings of J² in the refined bound ([`refined_radius_bound`]): ‖J^16‖∞^(1/16).
 const SQUARINGS: usize = 3;
 
@@ -152,6 +159,13 @@ pub(crate) struct StabilityGuard {
     /// Whether `unsafe_from`, while the modes are pending, holds the refined bound (false
     /// when they are not: derived, not state).
     refined: bool,
+    /// Whether `unsafe_from`, while the modes are pending, holds a bound at all (before the
+    /// first step that asks, it holds 0 for BDF3–5: derived, not state).
+    bounded: bool,
+    /// The largest |λ| of the stored modes, 0 if none: a prediction of where the next
+    /// Jacobian's lie, which only decides whether to try the bounds first (derived from the
+    /// modes, not state).
+    last_radius: f64,
 }
 
 impl Default for StabilityGuard {
@@ -169,6 +183,8 @@ impl StabilityGuard {
             unsafe_from: [f64::INFINITY; 6],
             pending: false,
             refined: false,
+            bounded: false,
+            last_radius: 0.0,
         }
     }
 
@@ -187,10 +203,11 @@ impl StabilityGuard {
         self.count = 0;
         self.pending = true;
         self.refined = false;
-        let bound = radius_bound(jac);
-        self.bound_by(bound);
+        self.bounded = false;
+        // No bound yet: a step of order 3–5 asks (`max_safe_order`); so does a state written.
+        self.bound_by(f64::INFINITY);
         // A Jacobian that is not finite has no modes to find: the guard allows any order.
-        if !bound.is_finite() {
+        if !jac.iter().all(|x| x.is_finite()) {
             self.resolve(jac);
         }
     }
@@ -224,6 +241,7 @@ impl StabilityGuard {
         }
         self.pending = false;
         self.refined = false;
+        self.bounded = false;
         self.count = 0;
         let Some(eigenvalues) = eigenvalues(jac) else {
             self.derive_bounds();
@@ -243,6 +261,10 @@ impl StabilityGuard {
     }
 
     fn derive_bounds(&mut self) {
+        self.last_radius = self.modes[..self.count.min(self.modes.len())]
+            .iter()
+            .map(|m| m.modulus)
+            .fold(0.0, f64::max);
         for (q, bound) in self.unsafe_from.iter_mut().enumerate() {
             *bound = match unstable_band(q) {
                 Some((lo, _)) => self.modes[..self.count.min(self.modes.len())]
@@ -283,6 +305,7 @@ impl StabilityGuard {
         self.count = 0;
         self.pending = false;
         self.refined = false;
+        self.bounded = false;
         self.derive_bounds();
     }
 
@@ -301,9 +324,18 @@ impl StabilityGuard {
         // Only order q's own band can need the modes: the loop below stops at the first order
         // whose band `h` is below, and the bounds' `unsafe_from` is below the modes'.
         if self.pending && q >= 3 && h.abs() >= self.unsafe_from[q] {
-            if !self.refined {
-                self.refined = true;
-                self.bound_by(refined_radius_bound(jac, SQUARINGS));
+            // Where the last modes put this step well inside the band's reach, the bounds
+            // would not spare the modes (each costs O(N³), as they do): straight to them.
+            let lo = unstable_band(q).map_or(f64::INFINITY, |(lo, _)| lo);
+            if h.abs() * self.last_radius < SKIP_BOUNDS_FROM * lo {
+                if !self.bounded {
+                    self.bounded = true;
+                    self.bound_by(radius_bound(jac));
+                }
+                if h.abs() >= self.unsafe_from[q] && !self.refined {
+                    self.refined = true;
+                    self.bound_by(refined_radius_bound(jac, SQUARINGS));
+                }
             }
             if h.abs() >= self.unsafe_from[q] {
                 self.resolve(jac);
