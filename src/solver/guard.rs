@@ -190,12 +190,14 @@ impl StabilityGuard {
 
     /// Takes a new Jacobian `jac` (at Jacobian evaluations only, not every step). Its modes
     /// are computed only when a step could reach the unstable band of one of them: every
-    /// eigenvalue has |λ| ≤ ρ̄, so a step with h·ρ̄ below BDF3's lower band edge needs none.
-    /// ρ̄ is first ‖J²‖∞^½ ([`radius_bound`]); a step that reaches its band refines it to
-    /// ‖J^16‖∞^(1/16) ([`refined_radius_bound`]), and only a step that reaches that one's
-    /// computes the modes. On the paper's scene at rtol 1e-5 the first bound sent 27 of 34
-    /// Jacobians to the eigenvalues, though no step reached BDF3's band; the refined one sends
-    /// 3. The decisions are those of the modes computed at once.
+    /// eigenvalue has |λ| ≤ ρ̄, so a step of order q with h·ρ̄ below BDF_q's lower band edge
+    /// needs none. Nothing is computed here: the first step of order 3–5 computes ρ̄ =
+    /// ‖J²‖∞^½ ([`radius_bound`]); a step that reaches its band refines it to ‖J^16‖∞^(1/16)
+    /// ([`refined_radius_bound`]), and only a step that reaches that one's computes the modes
+    /// (at once, without the bounds, where the last modes show that they could not spare
+    /// them: [`SKIP_BOUNDS_FROM`]). On the paper's scene at rtol 1e-5 the first bound sent 27
+    /// of 34 Jacobians to the eigenvalues, though no step reached BDF3's band; the refined one
+    /// sends 3. The decisions are those of the modes computed at once.
     pub(crate) fn update<D: Dim>(&mut self, jac: &OMatrix<f64, D, D>)
     where
         DefaultAllocator: Allocator<D, D>,
