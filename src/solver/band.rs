@@ -73,11 +73,19 @@ impl GenBand {
     pub fn mul_add(&self, s: f64, x: &[f64], y: &mut [f64]) {
         let n = self.n();
         for (i, (row, yi)) in self.rows.iter().zip(y.iter_mut()).enumerate() {
-            let lo = i.saturating_sub(P);
-            let hi = (i + P).min(n - 1);
             let mut sum = 0.0;
-            for j in lo..=hi {
-                sum += row[j + P - i] * x[j];
+            if let Some(window) = x.get(i.wrapping_sub(P)..i + P + 1) {
+                // An inner row: the whole band, a fixed-length loop (the same sums in the same
+                // order as the clipped loop below).
+                for (a, b) in row.iter().zip(window) {
+                    sum += a * b;
+                }
+            } else {
+                let lo = i.saturating_sub(P);
+                let hi = (i + P).min(n - 1);
+                for j in lo..=hi {
+                    sum += row[j + P - i] * x[j];
+                }
             }
             *yi += s * sum;
         }
