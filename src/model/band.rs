@@ -163,6 +163,21 @@ impl BandCholesky {
     pub fn solve2_in_place(&self, b: &mut [f64], c: &mut [f64]) {
         substitute(self.l.len(), |i| (&self.l[i], self.inv[i]), [b, c]);
     }
+
+    /// The factor of A + E from A's, `self`, where E lives in the last two rows and columns
+    /// only: `last` are those two rows of A + E (lower band). Row i of L depends on A's rows
+    /// 0..=i alone, so L's other rows are A's and only these two are computed, bit for bit as
+    /// [`Band::cholesky`] of A + E would. No allocation. `None` if A + E is not positive
+    /// definite there (or A has fewer than two rows).
+    pub fn with_last_rows(&self, last: [[f64; BAND + 1]; 2]) -> Option<TailCholesky<'_>> {
+        let n = self.l.len();
+        if n < 2 {
+            return None;
+        }
+        let second = factor_row(&last[0], n - 2, |j| self.l[j])?;
+        let end = factor_row(&last[1], n - 1, |j| if j == n - 2 { second } else { self.l[j] })?;
+        Some(TailCholesky { head: self, tail: [second, end], inv: [1.0 / second[0], 1.0 / end[0]] })
+    }
 }
 
 /// Solves L Lᵀ x = b in place for each of the K right-hand sides `bs`, L's row i and 1/L_ii
@@ -198,23 +213,6 @@ fn substitute<'r, const K: usize>(
         for (s, b) in s.iter().zip(bs.iter_mut()) {
             b[i] = s * inv;
         }
-    }
-}
-
-impl BandCholesky {
-    /// The factor of A + E from A's, `self`, where E lives in the last two rows and columns
-    /// only: `last` are those two rows of A + E (lower band). Row i of L depends on A's rows
-    /// 0..=i alone, so L's other rows are A's and only these two are computed, bit for bit as
-    /// [`Band::cholesky`] of A + E would. No allocation. `None` if A + E is not positive
-    /// definite there (or A has fewer than two rows).
-    pub fn with_last_rows(&self, last: [[f64; BAND + 1]; 2]) -> Option<TailCholesky<'_>> {
-        let n = self.l.len();
-        if n < 2 {
-            return None;
-        }
-        let second = factor_row(&last[0], n - 2, |j| self.l[j])?;
-        let end = factor_row(&last[1], n - 1, |j| if j == n - 2 { second } else { self.l[j] })?;
-        Some(TailCholesky { head: self, tail: [second, end], inv: [1.0 / second[0], 1.0 / end[0]] })
     }
 }
 
@@ -285,6 +283,9 @@ mod tests {
             assert!((a.form(&x, &y) - form).abs() <= 1e-13 * form.abs().max(1.0));
             let mut b = y.clone();
             a.cholesky().unwrap().solve_in_place(&mut b);
+            let want = dense.clone().lu().solve(&yv).unwrap();
+            let got = DVector::from_vec(b.clone());
+            assert!((got - &want).norm() <= 1e-12 * want.norm(), "n = {n}");
             let (mut b2, mut x2) = (y.clone(), x.clone());
             a.cholesky().unwrap().solve2_in_place(&mut b2, &mut x2);
             let mut x1 = x.clone();

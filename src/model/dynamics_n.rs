@@ -249,21 +249,23 @@ impl BeamBodyN {
     fn solve_b(&self, tip: [f64; 3], f: &mut [f64], a: Option<&mut [f64]>) -> bool {
         let t = self.beam.tip();
         debug_assert_eq!(t + 2, f.len());
-        if let Some(mass) = &self.mass_factor {
-            let (mut last, mut end) = (self.beam.mass.row(t), self.beam.mass.row(t + 1));
-            last[0] += tip[0];
-            end[1] += tip[1];
-            end[0] += tip[2];
-            let Some(chol) = mass.with_last_rows([last, end]) else {
-                return false;
-            };
-            match a {
-                Some(a) => chol.solve2_in_place(f, a),
-                None => chol.solve_in_place(f),
-            }
-            return true;
-        }
-        let Some(chol) = self.tip_band(tip).cholesky() else {
+        let (mut last, mut end) = (self.beam.mass.row(t), self.beam.mass.row(t + 1));
+        last[0] += tip[0];
+        end[1] += tip[1];
+        end[0] += tip[2];
+        // A massless beam has no M_b to factor: B's own factor then, its tip rows redone alike.
+        let own;
+        let head = match &self.mass_factor {
+            Some(mass) => mass,
+            None => match self.tip_band(tip).cholesky() {
+                Some(factor) => {
+                    own = factor;
+                    &own
+                }
+                None => return false,
+            },
+        };
+        let Some(chol) = head.with_last_rows([last, end]) else {
             return false;
         };
         match a {
