@@ -45,7 +45,9 @@ use beam_body::solver::OdeSystem;
 use libloading::Library;
 use nalgebra::{Const, SVector};
 
-use super::problem::{state_names, with_system, Counters, Outcome, Problem, States, WithSystem};
+use super::problem::{
+    state_names, with_system_in, Counters, Order, Outcome, Problem, States, WithSystem,
+};
 
 /// Names the CVODE library to load (see the module's documentation).
 const LIBRARY_VARIABLE: &str = "BEAM_BODY_CVODE_LIB";
@@ -118,8 +120,11 @@ struct Api {
     get_array_pointer: unsafe extern "C" fn(NVector) -> *mut f64,
     destroy: unsafe extern "C" fn(NVector),
     dense_matrix: unsafe extern "C" fn(SunIndex, SunIndex, SunContext) -> SunMatrix,
+    /// `SUNBandMatrix(N, mu, ml, sunctx)`.
+    band_matrix: unsafe extern "C" fn(SunIndex, SunIndex, SunIndex, SunContext) -> SunMatrix,
     mat_destroy: unsafe extern "C" fn(SunMatrix),
     linsol_dense: unsafe extern "C" fn(NVector, SunMatrix, SunContext) -> SunLinearSolver,
+    linsol_band: unsafe extern "C" fn(NVector, SunMatrix, SunContext) -> SunLinearSolver,
     linsol_free: unsafe extern "C" fn(SunLinearSolver) -> c_int,
     create: unsafe extern "C" fn(c_int, SunContext) -> CvodeMem,
     init: unsafe extern "C" fn(CvodeMem, RhsFn, f64, NVector) -> c_int,
@@ -216,7 +221,7 @@ impl Api {
         let mut missing = Vec::new();
         // SAFETY (every `sym!`): each name is resolved with its signature in the SUNDIALS 6.4
         // headers (cvode.h, cvode_ls.h, cvode_proj.h, sundials_context.h, nvector_serial.h,
-        // sunmatrix_dense.h, sunlinsol_dense.h). The pointer is copied out of the `Symbol`
+        // sunmatrix_dense.h, sunmatrix_band.h, sunlinsol_dense.h, sunlinsol_band.h). The pointer is copied out of the `Symbol`
         // and `Api` keeps `lib` loaded for as long as it holds them.
         macro_rules! sym {
             ($name:literal) => {
@@ -231,8 +236,10 @@ impl Api {
                 get_array_pointer: sym!("N_VGetArrayPointer")?,
                 destroy: sym!("N_VDestroy")?,
                 dense_matrix: sym!("SUNDenseMatrix")?,
+                band_matrix: sym!("SUNBandMatrix")?,
                 mat_destroy: sym!("SUNMatDestroy")?,
                 linsol_dense: sym!("SUNLinSol_Dense")?,
+                linsol_band: sym!("SUNLinSol_Band")?,
                 linsol_free: sym!("SUNLinSolFree")?,
                 create: sym!("CVodeCreate")?,
                 init: sym!("CVodeInit")?,
@@ -281,26 +288,40 @@ pub fn describe() -> Result<String, String> {
 
 /// Solves `problem` with CVODE's BDF at `rtol`, atol = 1e-3·rtol for every state.
 pub fn run(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
-    run_with_jac_every(problem, rtol, None)
+    run_with(problem, rtol, Options::default())
 }
 
-/// [`run`] with a Jacobian at the latest every `msbj` steps (CVODE's default 51 if `None`).
-pub fn run_with_jac_every(
-    problem: &Problem,
-    rtol: f64,
-    msbj: Option<c_long>,
-) -> Result<Outcome, String> {
+/// What [`run_with`] sets beyond CVODE's defaults.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Options {
+    /// A Jacobian at the latest every `msbj` steps (CVODE's default 51 if `None`).
+    pub msbj: Option<c_long>,
+    /// CVODE's band linear solver (`SUNBandMatrix`, `SUNLinSol_Band`) with the upper and
+    /// lower half-bandwidths both `band`, and its band difference-quotient Jacobian
+    /// (`cvLsBandDQJac`, which evaluates f once per group of 2·band + 1 columns and keeps the
+    /// entries inside the band), on the states of n elements node by node
+    /// ([`Order::ByNode`]). `None`: the dense solver on the states as [`with_system_in`] gives
+    /// them. A band narrower than the system leaves out the Jacobian's entries outside it: a
+    /// modified Newton with an approximate matrix, which CVODE's convergence test governs.
+    pub band: Option<SunIndex>,
+    /// At most this many steps (ours, `BdfConfig::max_steps`, if `None`).
+    pub max_steps: Option<c_long>,
+}
+
+/// [`run`] with `options`.
+pub fn run_with(problem: &Problem, rtol: f64, options: Options) -> Result<Outcome, String> {
     let api = api()?;
     let model = problem.scene.validate().map_err(|err| err.to_string())?;
-    with_system(&problem.scene, &model, Cvode { api, problem, rtol, msbj })
+    let order = if options.band.is_some() { Order::ByNode } else { Order::Halves };
+    with_system_in(&problem.scene, &model, order, Cvode { api, problem, rtol, options })
 }
 
-/// [`solve`] with its arguments, for [`with_system`].
+/// [`solve`] with its arguments, for [`with_system_in`].
 struct Cvode<'a> {
     api: &'a Api,
     problem: &'a Problem,
     rtol: f64,
-    msbj: Option<c_long>,
+    options: Options,
 }
 
 impl WithSystem for Cvode<'_> {
@@ -310,7 +331,7 @@ impl WithSystem for Cvode<'_> {
         S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S,
     {
-        solve(self.api, self.problem, self.rtol, self.msbj, system, y0)
+        solve(self.api, self.problem, self.rtol, self.options, system, y0)
     }
 }
 
@@ -567,7 +588,7 @@ fn solve<S, const N: usize>(
     api: &Api,
     problem: &Problem,
     rtol: f64,
-    msbj: Option<c_long>,
+    options: Options,
     system: impl Fn(PhiPiece) -> S,
     y0: SVector<f64, N>,
 ) -> Result<Outcome, String>
@@ -632,20 +653,26 @@ where
         }
         s.check((api.init)(s.mem, rhs::<S, N>, t0, s.y), "CVodeInit", &log)?;
         s.check((api.ss_tolerances)(s.mem, rtol, 1e-3 * rtol), "CVodeSStolerances", &log)?;
-        s.matrix = (api.dense_matrix)(n, n, s.ctx);
+        s.matrix = match options.band {
+            None => (api.dense_matrix)(n, n, s.ctx),
+            Some(band) => (api.band_matrix)(n, band.min(n - 1), band.min(n - 1), s.ctx),
+        };
         if s.matrix.is_null() {
-            return Err("CVODE: SUNDenseMatrix failed".into());
+            return Err("CVODE: SUNDenseMatrix or SUNBandMatrix failed".into());
         }
-        s.linsol = (api.linsol_dense)(s.y, s.matrix, s.ctx);
+        s.linsol = match options.band {
+            None => (api.linsol_dense)(s.y, s.matrix, s.ctx),
+            Some(_) => (api.linsol_band)(s.y, s.matrix, s.ctx),
+        };
         if s.linsol.is_null() {
-            return Err("CVODE: SUNLinSol_Dense failed".into());
+            return Err("CVODE: SUNLinSol_Dense or SUNLinSol_Band failed".into());
         }
         s.check((api.set_linear_solver)(s.mem, s.linsol, s.matrix), "CVodeSetLinearSolver", &log)?;
         s.check((api.set_user_data)(s.mem, data_ptr), "CVodeSetUserData", &log)?;
-        let max_steps = c_long::try_from(beam_body::solver::BdfConfig::default().max_steps)
-            .unwrap_or(c_long::MAX);
+        let ours = beam_body::solver::BdfConfig::default().max_steps;
+        let max_steps = options.max_steps.unwrap_or(c_long::try_from(ours).unwrap_or(c_long::MAX));
         s.check((api.set_max_num_steps)(s.mem, max_steps), "CVodeSetMaxNumSteps", &log)?;
-        if let Some(msbj) = msbj {
+        if let Some(msbj) = options.msbj {
             let set = api.set_jac_eval_frequency;
             s.check(set(s.mem, msbj), "CVodeSetJacEvalFrequency", &log)?;
         }

@@ -37,6 +37,16 @@ pub trait WithSystem {
 /// the constraint as `Run` starts them. A beam of 8 elements (reduced) is a system of 32
 /// states, [`FixedElements`].
 pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::Output {
+    with_system_in(scene, model, Order::Halves, w)
+}
+
+/// [`with_system`] with the beam's states of n elements in the order `order`.
+pub fn with_system_in<W: WithSystem>(
+    scene: &Scene,
+    model: &BeamBody,
+    order: Order,
+    w: W,
+) -> W::Output {
     let init = scene.initial;
     if scene.params.n_elements > 1 {
         assert!(
@@ -46,6 +56,7 @@ pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::O
         let beam = BeamBodyN::new(scene.params).expect("a valid scene");
         let system = |phi| FixedElements::<{ 4 * ELEMENTS }> {
             system: sim::elements_system(&beam, phi, Formulation::Reduced),
+            order,
         };
         let native = system(scene.law.piece_from(0.0)).system.start(
             init.v1,
@@ -53,7 +64,7 @@ pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::O
             init.dv1,
             init.dtheta1,
         );
-        let y0 = SVector::from_fn(|k, _| native[FixedElements::<{ 4 * ELEMENTS }>::native(k)]);
+        let y0 = SVector::from_fn(|k, _| native[order.native::<{ 4 * ELEMENTS }>(k)]);
         return w.apply(system, y0);
     }
     match scene.formulation {
@@ -72,34 +83,55 @@ pub fn with_system<W: WithSystem>(scene: &Scene, model: &BeamBody, w: W) -> W::O
 pub const ELEMENTS: usize = 8;
 
 /// The beam in n = N/4 elements, reduced, as a system of N states on the stack for the
-/// outside solvers, whose interfaces are of fixed size: the tip's (v1, ϑ1, v̇1, ϑ̇1) first
-/// (what the benchmark records), then the other nodes' coordinates and rates in the order of
-/// `ElementsSystem`. The right-hand side is `ElementsSystem`'s, through a copy each way.
+/// outside solvers, whose interfaces are of fixed size, in the order `order`: the tip's
+/// (v1, ϑ1, v̇1, ϑ̇1) first either way (what the benchmark records). The right-hand side is
+/// `ElementsSystem`'s, through a copy each way.
 #[derive(Clone, Copy)]
 pub struct FixedElements<'a, const N: usize> {
     pub system: ElementsSystem<'a>,
+    pub order: Order,
 }
 
-impl<const N: usize> FixedElements<'_, N> {
-    /// The index in `ElementsSystem`'s state of our state `k`: its coordinates are
+/// The order of [`FixedElements`]'s states after the tip's four.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Order {
+    /// The other nodes' coordinates, then their rates, in `ElementsSystem`'s order.
+    Halves,
+    /// Node by node from the tip to the root, each node's (v, ϑ, v̇, ϑ̇) together, so that
+    /// the Jacobian's entries of near nodes lie near its diagonal (for a band solver).
+    ByNode,
+}
+
+impl Order {
+    /// The index in `ElementsSystem`'s state of the state `k` of N: its coordinates are
     /// (v_1, ϑ_1, …, v_n, ϑ_n) and then their rates, the tip last in each half.
-    pub const fn native(k: usize) -> usize {
+    pub const fn native<const N: usize>(self, k: usize) -> usize {
         let half = N / 2;
-        match k {
-            0 | 1 => half - 2 + k,
-            2 | 3 => N - 4 + k,
-            _ if k < half + 2 => k - 4,
-            _ => k - 2,
+        match self {
+            Order::Halves => match k {
+                0 | 1 => half - 2 + k,
+                2 | 3 => N - 4 + k,
+                _ if k < half + 2 => k - 4,
+                _ => k - 2,
+            },
+            Order::ByNode => {
+                // Node j (0 at the root) holds the coordinates 2j, 2j + 1.
+                let j = N / 4 - 1 - k / 4;
+                match k % 4 {
+                    c @ (0 | 1) => 2 * j + c,
+                    c => half + 2 * j + c - 2,
+                }
+            }
         }
     }
 }
 
 impl<const N: usize> FixedElements<'_, N> {
     /// Our state `y` in `ElementsSystem`'s order.
-    fn to_native(y: &SVector<f64, N>) -> DVector<f64> {
+    fn native_state(&self, y: &SVector<f64, N>) -> DVector<f64> {
         let mut native = DVector::zeros(N);
         for k in 0..N {
-            native[Self::native(k)] = y[k];
+            native[self.order.native::<N>(k)] = y[k];
         }
         native
     }
@@ -107,12 +139,12 @@ impl<const N: usize> FixedElements<'_, N> {
 
 impl<const N: usize> OdeSystem<Const<N>> for FixedElements<'_, N> {
     fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
-        let f = self.system.rhs(t, &Self::to_native(y));
-        SVector::from_fn(|k, _| f[Self::native(k)])
+        let f = self.system.rhs(t, &self.native_state(y));
+        SVector::from_fn(|k, _| f[self.order.native::<N>(k)])
     }
 
     fn check_range(&self, t: f64, y: &SVector<f64, N>) -> Result<(), RangeViolation> {
-        self.system.check_range(t, &Self::to_native(y))
+        self.system.check_range(t, &self.native_state(y))
     }
 }
 
@@ -273,5 +305,22 @@ mod tests {
         }
         assert_eq!(states.len(), 4);
         assert!(states.rows().eq(rows.iter().copied()));
+    }
+
+    #[test]
+    fn both_orders_are_permutations_with_the_tip_first() {
+        const N: usize = 4 * ELEMENTS;
+        for order in [Order::Halves, Order::ByNode] {
+            let mut seen = [false; N];
+            for k in 0..N {
+                seen[order.native::<N>(k)] = true;
+            }
+            assert!(seen.iter().all(|&s| s), "{order:?}");
+            let tip: Vec<usize> = (0..4).map(|k| order.native::<N>(k)).collect();
+            assert_eq!(tip, [N / 2 - 2, N / 2 - 1, N - 2, N - 1], "{order:?}");
+        }
+        // ByNode: the root node last, its (v, ϑ, v̇, ϑ̇) together.
+        let root: Vec<usize> = (N - 4..N).map(|k| Order::ByNode.native::<N>(k)).collect();
+        assert_eq!(root, [0, 1, N / 2, N / 2 + 1]);
     }
 }

@@ -17,9 +17,10 @@
 //!    a Release build of CVODE with gcc on Linux: double precision, 64-bit indices, no error
 //!    checks, logging level 2, no MPI or third-party libraries.
 //! 3. The build: of the sources CMake puts in `libsundials_cvode` and `libsundials_core`,
-//!    those of CVODE with a dense direct solver (CVODE without its band and BBD
+//!    those of CVODE with its dense and band direct solvers (CVODE without its band and BBD
 //!    preconditioners, the SUNDIALS core, the serial N_Vector, the dense, band and sparse
-//!    SUNMatrix, the dense SUNLinearSolver, the Newton and fixed-point SUNNonlinearSolvers;
+//!    SUNMatrix, the dense and band SUNLinearSolvers, the Newton and fixed-point
+//!    SUNNonlinearSolvers;
 //!    plus `cvode_fused_stubs.c`, which CMake adds only with fused kernels: unused here), each
 //!    compiled with `cc -std=gnu99 -O3 -DNDEBUG -fPIC` (CMake's
 //!    Release flags and its `CMAKE_C_STANDARD` 99 with extensions), over the machine's cores,
@@ -46,7 +47,7 @@ use std::thread;
 use std::time::Instant;
 
 /// Bumped whenever the recipe changes in a way the stamp would not otherwise show.
-const RECIPE_VERSION: u32 = 1;
+const RECIPE_VERSION: u32 = 2;
 /// The crate that vendors SUNDIALS' sources, and its version (`=` in the manifest).
 const CRATE: &str = "sundials-sys";
 const CRATE_VERSION: &str = "0.6.2";
@@ -64,7 +65,7 @@ const HEADERS: [(&str, &str); 2] = [
     ("sundials_export.h", include_str!("sundials/sundials_export.h")),
 ];
 /// The C sources compiled, relative to the crate's `vendor/` directory.
-const SOURCES: [&str; 33] = [
+const SOURCES: [&str; 34] = [
     "src/cvode/cvode.c",
     "src/cvode/cvode_diag.c",
     "src/cvode/cvode_fused_stubs.c",
@@ -95,6 +96,7 @@ const SOURCES: [&str; 33] = [
     "src/sunmatrix/band/sunmatrix_band.c",
     "src/sunmatrix/dense/sunmatrix_dense.c",
     "src/sunmatrix/sparse/sunmatrix_sparse.c",
+    "src/sunlinsol/band/sunlinsol_band.c",
     "src/sunlinsol/dense/sunlinsol_dense.c",
     "src/sunnonlinsol/fixedpoint/sunnonlinsol_fixedpoint.c",
     "src/sunnonlinsol/newton/sunnonlinsol_newton.c",
