@@ -313,3 +313,27 @@ fn report(points: &[Point], disagreement: f64, mode: Mode, seconds: f64) -> Stri
     }
     md
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// CVODE's band solver on the whole band solves the 8-element scene as the dense one does,
+    /// and a band cut to 7 fails. Skipped without a CVODE (`BEAM_BODY_CVODE_LIB`, set by
+    /// `cargo xtask bench-elements`; run with it set: `cargo test -p beam-body-bench band`).
+    #[test]
+    fn cvode_band_solver_needs_the_whole_band() {
+        if let Err(err) = cvode::describe() {
+            eprintln!("skipped: {err}");
+            return;
+        }
+        let problem = problem().unwrap();
+        let dense = rows(&solve("cvode", &problem, 1e-6).unwrap());
+        let band = rows(&solve("cvode-band", &problem, 1e-6).unwrap());
+        let (difference, _) = crate::sweep::relative_error(&band, &dense, &[0, 1, 2, 3]);
+        eprintln!("band against dense at rtol 1e-6: {difference:.2e}");
+        assert!(difference < 1e-4, "{difference:e}");
+        let cut = solve("cvode-band7", &problem, 1e-6);
+        assert!(cut.as_ref().is_err_and(|e| e.contains("mxstep")), "{:?}", cut.err());
+    }
+}
