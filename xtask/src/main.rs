@@ -61,8 +61,9 @@ Commands:
   bench-elements [--quick]
           Work against precision of the beam in 8 elements (32 states, 1 % damping): ours
           beside CVODE (dense; band, whole and truncated) and diffsol on the same right-hand
-          side, the error against ours at rtol 1e-12; rtol 1e-4..1e-10 (3 tolerances with --quick), 5 rounds (3), medians;
-          target/bench/elements.md, and docs/work_precision_elements.md in the full run.
+          side, the error against ours at rtol 1e-12; rtol 1e-4..1e-10 (3 tolerances with
+          --quick), 5 rounds (3), medians; target/bench/elements.md, and
+          docs/work_precision_elements.md in the full run.
   bench-run --round K
           One round of the benchmark's Rust cases (used by `bench`, in a release build
           with --features bench): run the cases of target/bench/cases.csv in an order
