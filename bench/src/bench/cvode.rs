@@ -221,8 +221,9 @@ impl Api {
         let mut missing = Vec::new();
         // SAFETY (every `sym!`): each name is resolved with its signature in the SUNDIALS 6.4
         // headers (cvode.h, cvode_ls.h, cvode_proj.h, sundials_context.h, nvector_serial.h,
-        // sunmatrix_dense.h, sunmatrix_band.h, sunlinsol_dense.h, sunlinsol_band.h). The pointer is copied out of the `Symbol`
-        // and `Api` keeps `lib` loaded for as long as it holds them.
+        // sunmatrix_dense.h, sunmatrix_band.h, sunlinsol_dense.h, sunlinsol_band.h). The
+        // pointer is copied out of the `Symbol` and `Api` keeps `lib` loaded for as long as it
+        // holds them.
         macro_rules! sym {
             ($name:literal) => {
                 unsafe { symbol(&lib, concat!($name, "\0"), &mut missing) }
@@ -304,7 +305,8 @@ pub struct Options {
     /// them. A band narrower than the system leaves out the Jacobian's entries outside it: a
     /// modified Newton with an approximate matrix, which CVODE's convergence test governs.
     pub band: Option<SunIndex>,
-    /// At most this many steps (ours, `BdfConfig::max_steps`, if `None`).
+    /// At most this many steps on the way to each output time (CVODE's `mxstep`, which counts
+    /// per `CVode` call; ours, `BdfConfig::max_steps`, if `None`).
     pub max_steps: Option<c_long>,
 }
 
@@ -653,19 +655,23 @@ where
         }
         s.check((api.init)(s.mem, rhs::<S, N>, t0, s.y), "CVodeInit", &log)?;
         s.check((api.ss_tolerances)(s.mem, rtol, 1e-3 * rtol), "CVodeSStolerances", &log)?;
-        s.matrix = match options.band {
-            None => (api.dense_matrix)(n, n, s.ctx),
-            Some(band) => (api.band_matrix)(n, band.min(n - 1), band.min(n - 1), s.ctx),
+        let (linsol, kind) = match options.band {
+            None => {
+                s.matrix = (api.dense_matrix)(n, n, s.ctx);
+                (api.linsol_dense, "Dense")
+            }
+            Some(band) => {
+                let b = band.min(n - 1);
+                s.matrix = (api.band_matrix)(n, b, b, s.ctx);
+                (api.linsol_band, "Band")
+            }
         };
         if s.matrix.is_null() {
-            return Err("CVODE: SUNDenseMatrix or SUNBandMatrix failed".into());
+            return Err(format!("CVODE: SUN{kind}Matrix failed"));
         }
-        s.linsol = match options.band {
-            None => (api.linsol_dense)(s.y, s.matrix, s.ctx),
-            Some(_) => (api.linsol_band)(s.y, s.matrix, s.ctx),
-        };
+        s.linsol = linsol(s.y, s.matrix, s.ctx);
         if s.linsol.is_null() {
-            return Err("CVODE: SUNLinSol_Dense or SUNLinSol_Band failed".into());
+            return Err(format!("CVODE: SUNLinSol_{kind} failed"));
         }
         s.check((api.set_linear_solver)(s.mem, s.linsol, s.matrix), "CVodeSetLinearSolver", &log)?;
         s.check((api.set_user_data)(s.mem, data_ptr), "CVodeSetUserData", &log)?;
