@@ -263,13 +263,11 @@ impl StabilityGuard {
     }
 
     fn derive_bounds(&mut self) {
-        self.last_radius = self.modes[..self.count.min(self.modes.len())]
-            .iter()
-            .map(|m| m.modulus)
-            .fold(0.0, f64::max);
+        let modes = &self.modes[..self.count.min(self.modes.len())];
+        self.last_radius = modes.iter().map(|m| m.modulus).fold(0.0, f64::max);
         for (q, bound) in self.unsafe_from.iter_mut().enumerate() {
             *bound = match unstable_band(q) {
-                Some((lo, _)) => self.modes[..self.count.min(self.modes.len())]
+                Some((lo, _)) => modes
                     .iter()
                     .filter(|m| m.angle_deg > A_STABILITY_ANGLE_DEG[q])
                     .map(|m| lo / m.modulus)
