@@ -40,6 +40,7 @@ import numpy as np
 from oracle_n import (
     DEFAULT_H,
     HermiteBasis,
+    Model,
     _jac_complex_step,
     _law_fn,
     _segments,
@@ -47,7 +48,6 @@ from oracle_n import (
     gauss_coefficients,
     gauss_integrate,
     output_grid,
-    quadrature,
     scene_with_defaults,
 )
 from paper_example import PARAM_NAMES
@@ -70,16 +70,12 @@ class Elastica:
         self.s = (self.basis.breaks[:-1, None] + self.h * c[None, :]).ravel()
         self.w = np.tile(self.h * b, n)
         self.N1 = self.basis.eval(self.s, 1)  # (P, ndof): alpha = N1 q
+        self.N2 = self.basis.eval(self.s, 2)  # alpha' = N2 q
         self.c_tip = self.basis.eval([p["l"]], 1)[0]  # theta1 = c_tip . q
-        xq, wq = quadrature(self.basis.breaks, 6)
-        N0, N2 = self.basis.eval(xq, 0), self.basis.eval(xq, 2)
-        self.K = p["EI"] * N2.T @ (wq[:, None] * N2)
-        self.Mb = p["m"] * N0.T @ (wq[:, None] * N0)
-        a_r, b_r = (float(x) for x in damping)
-        if params:
-            a_r = float(params.get("damping_alpha", a_r))
-            b_r = float(params.get("damping_beta", b_r))
-        self.D = a_r * self.Mb + b_r * self.K
+        # The strain energy and the Rayleigh damping are the quadratic model's, by definition of
+        # the field (alpha' = w''; D from the beam's mass matrix at q = 0): taken from it.
+        quadratic = Model(self.basis, params, damping)
+        self.K, self.D = quadratic.K, quadratic.D
 
     # ---- integrals along s -------------------------------------------------------------------------
     def running(self, f, axis=-1):
@@ -159,7 +155,7 @@ class Elastica:
         r_t, C_t, th_t = (np.imag(z) / eps for z in moving)
         T = 0.5 * p["m"] * np.sum(self.w * np.sum(r_t**2, axis=-1))
         T += 0.5 * p["M2"] * np.sum(C_t**2) + 0.5 * p["J_C"] * th_t**2
-        curvature = q @ self.basis.eval(self.s, 2).T  # alpha' = w''
+        curvature = q @ self.N2.T
         V = 0.5 * p["EI"] * np.sum(self.w * curvature**2) - p["M2"] * p["g"] * C[0]
         if self.beam_gravity:
             V -= p["m"] * p["g"] * np.sum(self.w * r[:, 0])
@@ -169,15 +165,10 @@ class Elastica:
         T, V = self.energies(q, qd, phi, dphi)
         return T - V
 
-    def energy(self, q, qd, phi, dphi):
-        """T + V (constant while phi is held and nothing dissipates)."""
-        T, V = self.energies(q, qd, phi, dphi)
-        return T + V
-
 
 def trajectory(n, scene=None, t_eval=None, h=None, stages=8, npts=DEFAULT_NPTS, beam_gravity=False,
                damping=(0.0, 0.0)):
-    """(t, q, qd, model) of the exact beam on t_eval (default: the scene's output grid), by the
+    """(t, q, qd, model, stats) of the exact beam on t_eval (default: the scene's output grid), by the
     implicit Gauss method of oracle_n with steps of at most h, per segment of phi''."""
     s = scene_with_defaults(scene)
     params = {k: s[k] for k in PARAM_NAMES}
