@@ -6,7 +6,7 @@
 //! line) goes out.
 #![forbid(unsafe_code)]
 
-use crate::model::{BeamBody, Formulation, Interpolation, PaperLaw, Params, RangeCheck};
+use crate::model::{BeamBody, BeamModel, Formulation, Interpolation, PaperLaw, Params, RangeCheck};
 use crate::settings::{Key, Kind, Setting, Value, SETTINGS};
 use crate::solver::{BdfConfig, FixedStep};
 
@@ -155,6 +155,8 @@ impl Scene {
             Key::DampingAlpha => Real(p.damping_alpha),
             Key::DampingBeta => Real(p.damping_beta),
             Key::DampingRatio => Real(p.damping_ratio),
+            Key::Beam => Choice(position(&BeamModel::ALL, &p.beam)),
+            Key::BeamGravity => Bool(p.beam_gravity),
             Key::TRot => Real(self.law.t_rot),
             Key::PhiEnd => Real(self.law.phi_end),
             Key::Phi0 => Real(self.law.phi0),
@@ -241,6 +243,8 @@ impl Scene {
             Key::DampingAlpha => p.damping_alpha = real(value),
             Key::DampingBeta => p.damping_beta = real(value),
             Key::DampingRatio => p.damping_ratio = real(value),
+            Key::Beam => p.beam = item(&BeamModel::ALL, choice(value)),
+            Key::BeamGravity => p.beam_gravity = flag(value),
             Key::TRot => self.law.t_rot = real(value),
             Key::PhiEnd => self.law.phi_end = real(value),
             Key::Phi0 => self.law.phi0 = real(value),
@@ -504,8 +508,8 @@ mod tests {
         let mut s = Scene::default();
         s.set_text("EI", "2000").unwrap();
         assert_eq!(s.params.ei, 2000.0);
-        let e = s.set_text("beam", "exact").unwrap_err();
-        assert!(e.starts_with("unknown setting `beam`: must be one of l, EI,"), "{e}");
+        let e = s.set_text("beam_theory", "exact").unwrap_err();
+        assert!(e.starts_with("unknown setting `beam_theory`: must be one of l, EI,"), "{e}");
         let e = s.set_text("EI", "-1").unwrap_err();
         assert!(e.contains("`EI` = -1.0 is out of range: must be positive"), "{e}");
         assert!(s.set_text("dt_out", "0").is_err());

@@ -99,9 +99,24 @@ pub const COLUMNS_TYPE: EnumType = EnumType {
     ],
 };
 
+pub const BEAM_TYPE: EnumType = EnumType {
+    name: "Beam",
+    description: "The beam's theory",
+    items: &[
+        (
+            "quadratic",
+            "the paper's: deflection v(x), the geometric nonlinearity kept to second order              (u = -1/2 int v'^2), no axial inertia; valid for |v1| <= l, |theta1| <= pi/2",
+        ),
+        (
+            "exact",
+            "the inextensible elastica in the section angle alpha(s), with the beam's axial              inertia: valid at any rotation (formulation reduced)",
+        ),
+    ],
+};
+
 /// Every enumeration of the FMU's table, in the order of the model description.
 pub const ENUM_TYPES: &[EnumType] =
-    &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE];
+    &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE, BEAM_TYPE];
 
 /// What kind of value a setting holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,6 +155,8 @@ pub enum Key {
     DampingAlpha,
     DampingBeta,
     DampingRatio,
+    Beam,
+    BeamGravity,
     TRot,
     PhiEnd,
     Phi0,
@@ -345,7 +362,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 35] = [
+pub const SETTINGS: [Setting; 37] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -406,6 +423,25 @@ pub const SETTINGS: [Setting; 35] = [
         "Rayleigh damping of the beam set by the damping ratio zeta of its own first two modes \
          (the cantilever without the body); alpha and beta follow: give either this or them",
         PHYSICAL,
+    ),
+    row(
+        K::Beam,
+        "beam",
+        Kind::Choice(&BEAM_TYPE),
+        Finite,
+        Choice(0),
+        "The beam's theory: quadratic (the paper's cut at second order) or exact (the \
+         inextensible elastica, valid at any rotation)",
+        flag(true, "--beam"),
+    ),
+    row(
+        K::BeamGravity,
+        "beam_gravity",
+        Kind::Bool,
+        Finite,
+        Bool(false),
+        "Gravity on the beam itself, g per unit length m along +x (the paper leaves it out)",
+        FMU,
     ),
     row(
         K::TRot,
@@ -651,6 +687,8 @@ mod tests {
             Setting::of(Key::MaxOrder).parse("6").unwrap_err(),
             "`max_order` = 6 is out of range: must be an integer in 1..=5"
         );
-        assert!(Setting::by_name("beam").unwrap_err().starts_with("unknown setting `beam`"));
+        assert!(Setting::by_name("beam_theory")
+            .unwrap_err()
+            .starts_with("unknown setting `beam_theory`"));
     }
 }

@@ -29,7 +29,7 @@ use variables::{Var, Variable, DEFAULT_EXPERIMENT, VARIABLES};
 pub const MAX_STEPS_PER_DO_STEP: u64 = 1_000_000;
 
 /// Version of the model's part of a serialized state; bump it when `visit_state` changes.
-const STATE_VERSION: u32 = 3;
+const STATE_VERSION: u32 = 4;
 
 /// The beam–body FMU's model: the values, the run from ExitInitializationMode on, the
 /// outputs computed at the current time, and what the host has been told about φ.

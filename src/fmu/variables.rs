@@ -129,6 +129,8 @@ pub enum Var {
     VQuarter,
     VMid,
     VThreeQuarter,
+    Beam,
+    BeamGravity,
 }
 
 impl Var {
@@ -326,6 +328,8 @@ pub const VARIABLES: &[Variable] = &[
     output(Var::VQuarter, "v_quarter", "m", "Deflection of the beam at x = l/4"),
     output(Var::VMid, "v_mid", "m", "Deflection of the beam at x = l/2"),
     output(Var::VThreeQuarter, "v_three_quarter", "m", "Deflection of the beam at x = 3l/4"),
+    param(Var::Beam, Key::Beam),
+    param(Var::BeamGravity, Key::BeamGravity),
 ];
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the

@@ -177,7 +177,7 @@ impl BeamBodyN {
     }
 
     /// −K q − D q̇ into `f`.
-    fn elastic_into(&self, q: &[f64], qd: &[f64], f: &mut [f64]) {
+    pub(super) fn elastic_into(&self, q: &[f64], qd: &[f64], f: &mut [f64]) {
         self.beam.stiffness.mul_into(q, f);
         if let Some(d) = &self.damping {
             let mut dq = [0.0; MAX_DOFS];

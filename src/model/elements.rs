@@ -15,7 +15,7 @@ use super::band::Band;
 
 /// Shape functions of the element on ξ ∈ [0, 1] of length h, for (v_a, ϑ_a, v_b, ϑ_b):
 /// values, first, second and third derivatives in x.
-fn shape(xi: f64, h: f64) -> [[f64; 4]; 4] {
+pub(super) fn shape(xi: f64, h: f64) -> [[f64; 4]; 4] {
     let (x2, x3) = (xi * xi, xi * xi * xi);
     [
         [1.0 - 3.0 * x2 + 2.0 * x3, h * (xi - 2.0 * x2 + x3), 3.0 * x2 - 2.0 * x3, h * (x3 - x2)],
@@ -109,6 +109,19 @@ impl Elements {
     /// The index of the tip's deflection v1 in q; the tip's slope ϑ1 follows it.
     pub fn tip(&self) -> usize {
         2 * self.n - 2
+    }
+
+    /// The nodal values (v_k, ϑ_k), k = 1..n, of the one cubic of a cantilever with tip
+    /// deflection `v1` and slope `theta1` (the paper's single element): the start of every n
+    /// is the same shape.
+    pub fn tip_cubic(&self, v1: f64, theta1: f64) -> Vec<f64> {
+        let one = Elements::new(1, self.l, 1.0, 1.0);
+        (1..=self.n)
+            .flat_map(|k| {
+                let [v, dv, ..] = one.field(&[v1, theta1], self.l * k as f64 / self.n as f64);
+                [v, dv]
+            })
+            .collect()
     }
 
     /// v and its first three derivatives in x at `x` ∈ [0, l] for coordinates `q`. At a node

@@ -50,6 +50,36 @@ impl FromStr for Formulation {
     }
 }
 
+/// The beam's theory (the setting `beam`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BeamModel {
+    /// The paper's: v a graph over x, the geometric nonlinearity cut at second order
+    /// (u1 = −½∫v′²), no axial inertia of the beam.
+    #[default]
+    Quadratic,
+    /// The inextensible elastica in the section angle, valid at any rotation, with the
+    /// beam's axial inertia (`exact.rs`).
+    Exact,
+}
+
+impl BeamModel {
+    pub const ALL: [BeamModel; 2] = [BeamModel::Quadratic, BeamModel::Exact];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BeamModel::Quadratic => "quadratic",
+            BeamModel::Exact => "exact",
+        }
+    }
+}
+
+impl FromStr for BeamModel {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        by_name(&BeamModel::ALL, BeamModel::name, "beam", s)
+    }
+}
+
 /// What a run does when the state leaves the region where the equations hold (|v1| ≤ l,
 /// |ϑ1| ≤ π/2, and the dae formulation's drift; [`check_deflection`](super::systems)).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

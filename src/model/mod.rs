@@ -4,9 +4,12 @@
 #![forbid(unsafe_code)]
 
 mod band;
+mod beam_n;
+mod dense;
 mod dynamics;
 mod dynamics_n;
 mod elements;
+mod exact;
 mod formulation;
 mod jacobian_n;
 mod kinematics;
@@ -14,15 +17,19 @@ mod params;
 mod phi;
 mod signal;
 mod systems;
+mod systems_exact;
 mod systems_n;
 
+pub use beam_n::{BeamN, SystemN};
 pub use dynamics::{BeamBody, Modes, Reactions};
 pub use dynamics_n::{BeamBodyN, MAX_ELEMENTS};
 pub use elements::Elements;
-pub use formulation::{Formulation, RangeCheck};
+pub use exact::{ExactBeam, PointMotion, GAUSS_POINTS};
+pub use formulation::{BeamModel, Formulation, RangeCheck};
 pub use kinematics::{pq, u1, u1_accel_bias};
 pub use params::{ParamError, Params};
 pub use phi::{PaperLaw, Phi, PhiPiece, Poly};
 pub use signal::{HostSignal, Interpolation, Sample, SignalError, HISTORY};
 pub use systems::{DaeSystem, Kinematics, Outputs, TwoDofSystem};
+pub use systems_exact::ExactSystem;
 pub use systems_n::ElementsSystem;

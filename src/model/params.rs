@@ -1,3 +1,4 @@
+use super::formulation::BeamModel;
 use crate::range::Range;
 use std::fmt;
 
@@ -26,6 +27,11 @@ pub struct Params {
     /// Rayleigh damping given as the ratio ζ ≥ 0 of the first two modes at rest at φ = 0,
     /// instead of α and β. Default 0.
     pub damping_ratio: f64,
+    /// The beam's theory: the paper's quadratic cut, or the geometrically exact elastica.
+    /// Default quadratic.
+    pub beam: BeamModel,
+    /// Gravity on the beam itself, along +x (the paper leaves it out). Default false.
+    pub beam_gravity: bool,
 }
 
 impl Default for Params {
@@ -42,6 +48,8 @@ impl Default for Params {
             damping_alpha: 0.0,
             damping_beta: 0.0,
             damping_ratio: 0.0,
+            beam: BeamModel::Quadratic,
+            beam_gravity: false,
         }
     }
 }
@@ -94,10 +102,13 @@ impl Params {
         check("damping_ratio", self.damping_ratio, Range::NonNegative)
     }
 
-    /// Whether these are the paper's model: one element and no damping, which the
-    /// two-coordinate equations of `dynamics.rs` integrate on the stack.
+    /// Whether these are the paper's model: one element of the quadratic beam without damping
+    /// or the beam's weight, which the two-coordinate equations of `dynamics.rs` integrate on
+    /// the stack.
     pub fn is_paper_model(&self) -> bool {
         self.n_elements == 1
+            && self.beam == BeamModel::Quadratic
+            && !self.beam_gravity
             && self.damping_alpha == 0.0
             && self.damping_beta == 0.0
             && self.damping_ratio == 0.0

@@ -83,6 +83,9 @@ pub struct Kinematics {
     pub quarter: [[f64; 3]; 3],
     /// Rayleigh's (α, β) of the beam in use.
     pub rayleigh: (f64, f64),
+    /// The root's shear force and bending moment [N, N·m] where the system computes them
+    /// itself (the exact beam); `None`: from `node1` and the reactions.
+    pub root: Option<(f64, f64)>,
 }
 
 /// The deflection of the paper's single element at l/4, l/2 and 3l/4 for tip values
@@ -114,6 +117,9 @@ impl Kinematics {
     /// The shear force and bending moment at the clamp [N, N·m] (`elements::root_loads`),
     /// given the hinge reactions.
     pub fn root_loads(&self, model: &BeamBody, reactions: &Reactions) -> (f64, f64) {
+        if let Some(root) = self.root {
+            return root;
+        }
         let p = &model.params;
         super::elements::root_loads(
             p.n_elements,
@@ -270,6 +276,7 @@ impl TwoDofSystem<'_> {
                 quarter_points(l, acc[0], acc[1]),
             ],
             rayleigh: (0.0, 0.0),
+            root: None,
         }
     }
 
@@ -350,6 +357,7 @@ impl DaeSystem<'_> {
                 ]
             },
             rayleigh: (0.0, 0.0),
+            root: None,
         }
     }
 

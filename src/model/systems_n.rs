@@ -37,18 +37,10 @@ impl ElementsSystem<'_> {
     /// every n is the same shape), u2 and u̇2 consistent.
     pub fn start(&self, v1: f64, theta1: f64, dv1: f64, dtheta1: f64) -> DVector<f64> {
         let beam = &self.model.beam;
-        let one = super::Elements::new(1, beam.l, 1.0, 1.0);
         let (nq, nc) = (beam.dofs(), self.coordinates());
         let mut y = DVector::zeros(self.states());
-        for k in 1..=beam.n {
-            let x = beam.l * k as f64 / beam.n as f64;
-            let [v, dv, ..] = one.field(&[v1, theta1], x);
-            let [w, dw, ..] = one.field(&[dv1, dtheta1], x);
-            y[2 * k - 2] = v;
-            y[2 * k - 1] = dv;
-            y[nc + 2 * k - 2] = w;
-            y[nc + 2 * k - 1] = dw;
-        }
+        y.as_mut_slice()[..nq].copy_from_slice(&beam.tip_cubic(v1, theta1));
+        y.as_mut_slice()[nc..nc + nq].copy_from_slice(&beam.tip_cubic(dv1, dtheta1));
         if self.formulation.is_dae() {
             let (u, du) = self.model.u1(&y.as_slice()[..nq], &y.as_slice()[nc..nc + nq]);
             y[nq] = u;
@@ -129,6 +121,7 @@ impl ElementsSystem<'_> {
                 [0.25, 0.5, 0.75].map(|f| self.model.beam.field(c, f * self.model.beam.l)[0])
             }),
             rayleigh: self.model.rayleigh(),
+            root: None,
         }
     }
 }

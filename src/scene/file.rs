@@ -164,8 +164,8 @@ mod tests {
             e,
             "line 2: `t_end` = \"5\": must be a number, positive and finite [s], not a string"
         );
-        let e = Scene::from_toml("\n\nbeam = \"exact\"\n").unwrap_err();
-        assert!(e.starts_with("line 3: unknown setting `beam`"), "{e}");
+        let e = Scene::from_toml("\n\nbeam_theory = \"exact\"\n").unwrap_err();
+        assert!(e.starts_with("line 3: unknown setting `beam_theory`"), "{e}");
         let e = Scene::from_toml("formulation = \"dae-stabilized\"").unwrap_err();
         assert!(e.contains("must be one of reduced, dae, dae_stabilized, linear"), "{e}");
         let e = Scene::from_toml("max_order = 3.0").unwrap_err();

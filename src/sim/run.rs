@@ -6,8 +6,8 @@
 use super::SimError;
 use crate::math;
 use crate::model::{
-    BeamBody, BeamBodyN, DaeSystem, ElementsSystem, Formulation, HostSignal, Kinematics, Outputs,
-    PaperLaw, Phi, PhiPiece, Poly, RangeCheck, Sample, TwoDofSystem,
+    BeamBody, BeamBodyN, BeamN, DaeSystem, ElementsSystem, Formulation, HostSignal, Kinematics,
+    Outputs, PaperLaw, Phi, PhiPiece, Poly, RangeCheck, Sample, SystemN, TwoDofSystem,
 };
 use crate::scene::{InitialState, PhiSource, Scene};
 use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
@@ -33,9 +33,9 @@ pub enum PhiInput {
 #[derive(Clone, Debug)]
 pub struct Run {
     model: BeamBody,
-    /// The beam in n elements, or damped: `None` for the paper's model, which `model`
-    /// integrates alone.
-    elements: Option<Box<BeamBodyN>>,
+    /// The beam in n elements, damped, or exact: `None` for the paper's model, which
+    /// `model` integrates alone.
+    elements: Option<Box<BeamN>>,
     formulation: Formulation,
     input: PhiInput,
     /// The piece of φ in use: what the right-hand side evaluates.
@@ -141,7 +141,7 @@ impl Run {
         let phi0 = if input { first.phi } else { scene.law.eval(t0).phi };
         let model = scene.check_model(phi0).map_err(SimError::Setting)?;
         let elements = (!scene.params.is_paper_model())
-            .then(|| BeamBodyN::new(scene.params).map(Box::new))
+            .then(|| BeamN::new(scene.params, scene.formulation).map(Box::new))
             .transpose()
             .map_err(SimError::Setting)?;
         let (formulation, init) = (scene.formulation, scene.initial);
@@ -217,19 +217,21 @@ impl Run {
         })
     }
 
-    /// Integrates the beam in n elements (or damped) instead of the paper's model, from
-    /// the same initial state (the tip's values, [`ElementsSystem::start`]).
+    /// Integrates the beam in n elements (or damped, or exact) instead of the paper's model,
+    /// from the same initial state (the tip's values, [`SystemN::start`]).
     fn use_elements(
         &mut self,
-        elements: Box<BeamBodyN>,
+        elements: Box<BeamN>,
         options: &BdfConfig,
         t0: f64,
         init: InitialState,
     ) -> Result<(), SolverError> {
-        let sys = elements_system(&elements, self.piece, self.formulation);
+        let sys = elements.system(self.piece, self.formulation, true);
         let y0 = sys.start(init.v1, init.theta1, init.dv1, init.dtheta1);
         let mut bdf = Bdf::new(*options, t0, y0)?;
-        bdf.set_second_order(true);
+        // The quadratic beam's Jacobian comes in parts (band and rank one); the exact beam's
+        // is dense.
+        bdf.set_second_order(matches!(*elements, BeamN::Quadratic(_)));
         self.bdf = Integrator::Elements(bdf);
         self.elements = Some(elements);
         Ok(())
@@ -240,7 +242,7 @@ impl Run {
     }
 
     /// The beam in n elements, when the run integrates it.
-    pub fn elements(&self) -> Option<&BeamBodyN> {
+    pub fn elements(&self) -> Option<&BeamN> {
         self.elements.as_deref()
     }
 
@@ -426,9 +428,9 @@ impl Run {
         dae(&self.model, self.piece, self.formulation)
     }
 
-    fn elements_system(&self) -> ElementsSystem<'_> {
+    fn elements_system(&self) -> SystemN<'_> {
         let model = self.elements.as_deref().expect("a run of elements has its model");
-        elements_system(model, self.piece, self.formulation)
+        model.system(self.piece, self.formulation, true)
     }
 
     /// Steps until t ≥ `tout`, never past `tstop`, through the law's breakpoint.
@@ -491,10 +493,7 @@ impl Run {
                 }
                 Integrator::Elements(b) => {
                     let model = elements_model.expect("a run of elements has its model");
-                    let sys = ElementsSystem {
-                        range_check,
-                        ..elements_system(model, piece, formulation)
-                    };
+                    let sys = model.system(piece, formulation, range_check);
                     advance_probing(b, &sys, tout, tstop, probe, single)
                 }
             };

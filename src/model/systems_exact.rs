@@ -1,0 +1,172 @@
+//! The exact beam ([`ExactBeam`]) as a first-order system y = (q, q̇) of 4n states, its
+//! outputs, and the one limit it still has: its centreline must not cross itself.
+
+use super::exact::ExactBeam;
+use super::phi::PhiPiece;
+use super::systems::Kinematics;
+use crate::solver::{OdeSystem, RangeViolation};
+use nalgebra::{DMatrix, DVector, Dyn};
+
+/// The exact beam on a piece of φ.
+#[derive(Clone, Copy, Debug)]
+pub struct ExactSystem<'a> {
+    pub model: &'a ExactBeam,
+    pub phi: PhiPiece,
+    /// Whether [`check_range`](OdeSystem::check_range) stops a centreline that crosses
+    /// itself; without it only a state that is not a number stops.
+    pub range_check: bool,
+}
+
+/// Where two segments p0–p1 and q0–q1 cross, as the fraction along the first; `None` if
+/// they do not (touching ends count as no crossing).
+fn crossing(p0: [f64; 2], p1: [f64; 2], q0: [f64; 2], q1: [f64; 2]) -> Option<f64> {
+    let d = [p1[0] - p0[0], p1[1] - p0[1]];
+    let e = [q1[0] - q0[0], q1[1] - q0[1]];
+    let den = d[0] * e[1] - d[1] * e[0];
+    if den == 0.0 {
+        return None;
+    }
+    let w = [q0[0] - p0[0], q0[1] - p0[1]];
+    let s = (w[0] * e[1] - w[1] * e[0]) / den;
+    let t = (w[0] * d[1] - w[1] * d[0]) / den;
+    (s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0).then_some(s)
+}
+
+impl ExactSystem<'_> {
+    pub fn states(&self) -> usize {
+        2 * self.model.dofs()
+    }
+
+    /// The state of the tip's values, as [`ElementsSystem::start`](super::ElementsSystem::start):
+    /// the nodal (w, α) of the one cubic w with that end value and slope. ϑ1 is then exact,
+    /// and v1 = ∫ sin α ds is the given deflection to first order.
+    pub fn start(&self, v1: f64, theta1: f64, dv1: f64, dtheta1: f64) -> DVector<f64> {
+        let beam = &self.model.quadratic.beam;
+        let q = beam.tip_cubic(v1, theta1);
+        DVector::from_iterator(self.states(), q.into_iter().chain(beam.tip_cubic(dv1, dtheta1)))
+    }
+
+    /// The motion at (t, y): the tip's, the quarter points', the beam's energy and the loads
+    /// at the root by the balance of momentum and of angular momentum of beam and body.
+    pub fn kinematics(&self, t: f64, y: &DVector<f64>) -> Kinematics {
+        let model = self.model;
+        let nq = model.dofs();
+        let (q, qd) = y.as_slice().split_at(nq);
+        let phi = self.phi.eval(t);
+        let mut acc = vec![0.0; nq];
+        model.accelerations(&phi, q, qd, &mut acc);
+        let tip = model.tip(q, qd, &acc);
+        let l = model.params().l;
+        let at = [0.25, 0.5, 0.75].map(|f| model.point(q, qd, &acc, f * l));
+        let (t1, p1) = model.beam_energy(q, qd);
+        let tp = nq - 2;
+        Kinematics {
+            t,
+            v1: tip.r[1],
+            theta1: q[tp + 1],
+            u2: tip.r[0] - l,
+            dv1: tip.v[1],
+            dtheta1: qd[tp + 1],
+            du2: tip.v[0],
+            ddv1: tip.a[1],
+            ddtheta1: acc[tp + 1],
+            ddu2: tip.a[0],
+            phi,
+            drift: 0.0,
+            beam_energy: Some(t1 + p1),
+            node1: [q[0], q[1], qd[0], qd[1], acc[0], acc[1]],
+            quarter: [at.map(|p| p.r[1]), at.map(|p| p.v[1]), at.map(|p| p.a[1])],
+            rayleigh: model.quadratic.rayleigh(),
+            root: Some(model.root_loads(&phi, q, qd, &acc)),
+        }
+    }
+}
+
+impl OdeSystem<Dyn> for ExactSystem<'_> {
+    fn rhs(&self, t: f64, y: &DVector<f64>) -> DVector<f64> {
+        let nq = self.model.dofs();
+        let mut f = DVector::zeros(y.len());
+        let (rates, acc) = f.as_mut_slice().split_at_mut(nq);
+        rates.copy_from_slice(&y.as_slice()[nq..]);
+        let (q, qd) = y.as_slice().split_at(nq);
+        self.model.accelerations(&self.phi.eval(t), q, qd, acc);
+        f
+    }
+
+    /// J = [[0, I], [−M⁻¹S, −M⁻¹C]] with S = ∂R/∂q and C = ∂R/∂q̇ at the accelerations of y,
+    /// by forward differences of the residual (O(n) each), and M by Cholesky.
+    fn jacobian(&self, t: f64, y: &DVector<f64>) -> Option<DMatrix<f64>> {
+        let model = self.model;
+        let nq = model.dofs();
+        let phi = self.phi.eval(t);
+        let (q, qd) = y.as_slice().split_at(nq);
+        let mut acc = vec![0.0; nq];
+        model.accelerations(&phi, q, qd, &mut acc);
+        let mut r0 = vec![0.0; nq];
+        model.residual(&phi, q, qd, &acc, &mut r0);
+        let mut parts = DMatrix::zeros(nq, 2 * nq);
+        let (mut x, mut r) = (y.as_slice().to_vec(), vec![0.0; nq]);
+        for c in 0..2 * nq {
+            let step = 1e-7 * (1.0 + x[c].abs());
+            x[c] += step;
+            let (qp, qdp) = x.split_at(nq);
+            model.residual(&phi, qp, qdp, &acc, &mut r);
+            x[c] = y[c];
+            for k in 0..nq {
+                parts[(k, c)] = -(r[k] - r0[k]) / step;
+            }
+        }
+        let lower = model.mass_matrix(q, phi.phi).cholesky()?.solve(&parts);
+        let mut j = DMatrix::zeros(2 * nq, 2 * nq);
+        for k in 0..nq {
+            j[(k, nq + k)] = 1.0;
+        }
+        j.view_mut((nq, 0), (nq, 2 * nq)).copy_from(&lower);
+        Some(j)
+    }
+
+    fn check_range(&self, _t: f64, y: &DVector<f64>) -> Result<(), RangeViolation> {
+        let nq = self.model.dofs();
+        if let Some(k) = (0..2 * nq).find(|&k| !y[k].is_finite()) {
+            return Err(RangeViolation { name: "q", value: y[k], allowed: "a number" });
+        }
+        if !self.range_check {
+            return Ok(());
+        }
+        let q = &y.as_slice()[..nq];
+        // A curve whose tangent turns by less than π cannot cross itself (the loop between
+        // two crossing points turns by more than π): only then is the polyline searched.
+        let (lo, hi) = self.model.angle_range(q);
+        if hi - lo <= std::f64::consts::PI {
+            return Ok(());
+        }
+        let line = self.model.centreline(q);
+        for i in 0..line.len() - 1 {
+            for j in i + 2..line.len() - 1 {
+                let (p0, p1) = (line[i], line[i + 1]);
+                if let Some(f) = crossing(p0.1, p1.1, line[j].1, line[j + 1].1) {
+                    return Err(RangeViolation {
+                        name: "beam",
+                        value: p0.0 + f * (p1.0 - p0.0),
+                        allowed: "a centreline that does not cross itself (the model has no \
+                                  contact; the value is the arc length where it crosses)",
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segments_cross_only_inside() {
+        let c = crossing([0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.0]);
+        assert_eq!(c, Some(0.5));
+        assert_eq!(crossing([0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [2.0, 1.0]), None);
+        assert_eq!(crossing([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]), None);
+    }
+}
