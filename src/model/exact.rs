@@ -369,7 +369,8 @@ impl ExactBeam {
         let zero = [0.0; MAX_DOFS];
         self.residual_with(&ang, phi, q, qd, &zero[..nq], out);
         out.iter_mut().for_each(|f| *f = -*f);
-        let mut mass = [0.0; MAX_DOFS * MAX_DOFS];
+        // On the heap: zeroing a stack buffer for the largest n costs more than the allocation.
+        let mut mass = vec![0.0; nq * nq];
         self.mass_with(&ang, q[nq - 1] + phi.phi, &mut mass);
         if !cholesky_in_place(&mut mass[..nq * nq], nq) {
             out.fill(f64::NAN);

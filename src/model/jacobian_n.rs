@@ -19,7 +19,7 @@ use super::dynamics_n::BeamBodyN;
 use super::params::Params;
 use super::phi::Phi;
 use crate::math;
-use crate::solver::{GenBand, SecondOrder};
+use crate::solver::{BandedParts, GenBand, SecondOrder};
 
 /// `band` of the model's symmetric [`Band`](super::band::Band) into `out`, times `s`.
 fn add_symmetric(out: &mut GenBand, s: f64, band: &super::band::Band) {
@@ -55,7 +55,7 @@ impl BeamBodyN {
         let t = self.beam.tip();
         let e = t + 1;
         let beam = &self.beam;
-        let mut parts = SecondOrder::zeros(n);
+        let mut parts = BandedParts::zeros(n);
         add_symmetric(&mut parts.mass.band, 1.0, &beam.mass);
         add_symmetric(&mut parts.stiffness.band, 1.0, &beam.stiffness);
         if let Some(d) = self.damping_band() {
@@ -82,7 +82,7 @@ impl BeamBodyN {
             let dp = &mut parts.damping.band;
             dp.add(t, e, m2 * day_dth);
             dp.add(e, e, m2 * (-r * s0 * dax_dth + r * c0 * day_dth));
-            return Some(parts);
+            return Some(SecondOrder::Banded(parts));
         }
         let (s, c) = math::sin_cos(q[e] + phi.phi);
         let dth = qd[e] + w;
@@ -123,7 +123,7 @@ impl BeamBodyN {
         parts.stiffness.u = a;
         parts.stiffness.v = ga.iter().map(|x| m2 * x).collect();
         parts.stiffness.v[e] += m2 * (r * c * acc[e] - dax);
-        Some(parts)
+        Some(SecondOrder::Banded(parts))
     }
 }
 

@@ -4,7 +4,7 @@
 use super::exact::ExactBeam;
 use super::phi::PhiPiece;
 use super::systems::Kinematics;
-use crate::solver::{OdeSystem, RangeViolation};
+use crate::solver::{DenseParts, OdeSystem, RangeViolation, SecondOrder};
 use nalgebra::{DMatrix, DVector, Dyn};
 
 /// The exact beam on a piece of φ.
@@ -93,15 +93,18 @@ impl OdeSystem<Dyn> for ExactSystem<'_> {
         f
     }
 
-    /// J = [[0, I], [−M⁻¹S, −M⁻¹C]] with S = ∂R/∂q and C = ∂R/∂q̇ at the accelerations of y,
-    /// by forward differences of the residual (O(n) each), and M by Cholesky.
-    fn jacobian(&self, t: f64, y: &DVector<f64>) -> Option<DMatrix<f64>> {
+    /// The parts M, C = ∂R/∂q̇ and S = ∂R/∂q at the accelerations of y, dense: S and C by
+    /// forward differences of the residual (O(n) each, so O(n²) in all).
+    fn second_order(&self, t: f64, y: &DVector<f64>) -> Option<SecondOrder> {
         let model = self.model;
         let nq = model.dofs();
         let phi = self.phi.eval(t);
         let (q, qd) = y.as_slice().split_at(nq);
         let mut acc = vec![0.0; nq];
         model.accelerations(&phi, q, qd, &mut acc);
+        if !acc.iter().all(|x| x.is_finite()) {
+            return None;
+        }
         let mut r0 = vec![0.0; nq];
         model.residual(&phi, q, qd, &acc, &mut r0);
         let mut parts = DMatrix::zeros(nq, 2 * nq);
@@ -113,16 +116,14 @@ impl OdeSystem<Dyn> for ExactSystem<'_> {
             model.residual(&phi, qp, qdp, &acc, &mut r);
             x[c] = y[c];
             for k in 0..nq {
-                parts[(k, c)] = -(r[k] - r0[k]) / step;
+                parts[(k, c)] = (r[k] - r0[k]) / step;
             }
         }
-        let lower = model.mass_matrix(q, phi.phi).cholesky()?.solve(&parts);
-        let mut j = DMatrix::zeros(2 * nq, 2 * nq);
-        for k in 0..nq {
-            j[(k, nq + k)] = 1.0;
-        }
-        j.view_mut((nq, 0), (nq, 2 * nq)).copy_from(&lower);
-        Some(j)
+        Some(SecondOrder::Dense(DenseParts {
+            mass: model.mass_matrix(q, phi.phi),
+            damping: parts.columns(nq, nq).into_owned(),
+            stiffness: parts.columns(0, nq).into_owned(),
+        }))
     }
 
     fn check_range(&self, _t: f64, y: &DVector<f64>) -> Result<(), RangeViolation> {

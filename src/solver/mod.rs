@@ -60,6 +60,6 @@ pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
 /// solve as the integrator does them (`cargo xtask bench`, costs.csv).
 #[doc(hidden)]
 pub use lu::Lu;
-pub use second_order::{BandRankOne, SecondOrder};
+pub use second_order::{BandRankOne, BandedParts, DenseParts, Layout, SecondOrder};
 pub use stats::Stats;
 pub use system::{OdeSystem, RangeViolation};

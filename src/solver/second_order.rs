@@ -6,14 +6,16 @@
 //!
 //!   (M + γC + γ²S) dẋ = M r2 − γ S r1,   dx = r1 + γ dẋ,
 //!
-//! whose matrix is a band (LU with pivoting, [`GenBand`]) and three rank-one terms
-//! (Sherman–Morrison–Woodbury with a 3×3 capacitance matrix; Golub & Van Loan, *Matrix
-//! Computations*, 4th ed., §2.1.4). Everything costs O(m): the dense LU of I − γJ costs
-//! O(m³) and its solve O(m²).
+//! In the banded layout ([`BandedParts`]) its matrix is a band (LU with pivoting,
+//! [`GenBand`]) and three rank-one terms (Sherman–Morrison–Woodbury with a 3×3 capacitance
+//! matrix; Golub & Van Loan, *Matrix Computations*, 4th ed., §2.1.4), and everything costs
+//! O(m): the dense LU of I − γJ costs O(m³) and its solve O(m²). In the dense layout
+//! ([`DenseParts`], the exact beam's configuration-dependent mass matrix) it is an m×m LU,
+//! an eighth of the 2m×2m one's cost.
 
 use super::band::{BandLu, GenBand};
 use super::snapshot::StateVisitor;
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Vector3, LU};
 
 /// A band matrix plus u·vᵀ.
 #[derive(Clone, Debug, PartialEq)]
@@ -49,9 +51,152 @@ impl BandRankOne {
     }
 }
 
-/// The three parts of a second-order system's Jacobian at a point.
+/// The parts of a second-order system's Jacobian at a point, in one of two layouts.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SecondOrder {
+pub enum SecondOrder {
+    Banded(BandedParts),
+    Dense(DenseParts),
+}
+
+/// The layout of [`SecondOrder`] a solver expects ([`Bdf::set_second_order`]).
+///
+/// [`Bdf::set_second_order`]: super::Bdf::set_second_order
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    Banded,
+    Dense,
+}
+
+/// M, C and S as dense m×m matrices.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DenseParts {
+    pub mass: DMatrix<f64>,
+    pub damping: DMatrix<f64>,
+    pub stiffness: DMatrix<f64>,
+}
+
+/// [`SecondOrder`]'s Newton matrix factored for one γ. A solver holds one.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug)]
+pub enum SecondOrderLu {
+    Banded(BandedLu),
+    Dense { gamma: f64, lu: LU<f64, Dyn, Dyn> },
+}
+
+impl SecondOrder {
+    /// The m×m zero parts of a layout.
+    pub fn zeros(layout: Layout, m: usize) -> Self {
+        match layout {
+            Layout::Banded => SecondOrder::Banded(BandedParts::zeros(m)),
+            Layout::Dense => {
+                let z = DMatrix::zeros(m, m);
+                SecondOrder::Dense(DenseParts { mass: z.clone(), damping: z.clone(), stiffness: z })
+            }
+        }
+    }
+
+    /// Its layout.
+    pub fn layout(&self) -> Layout {
+        match self {
+            SecondOrder::Banded(_) => Layout::Banded,
+            SecondOrder::Dense(_) => Layout::Dense,
+        }
+    }
+
+    /// The number of coordinates m (the system has 2m states).
+    pub fn coordinates(&self) -> usize {
+        match self {
+            SecondOrder::Banded(p) => p.coordinates(),
+            SecondOrder::Dense(p) => p.mass.nrows(),
+        }
+    }
+
+    /// Visits every number, named `structure`: the banded parts' ([`BandedParts::visit`]),
+    /// or each dense part's m² entries, column by column.
+    pub(crate) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
+        match self {
+            SecondOrder::Banded(p) => p.visit(v),
+            SecondOrder::Dense(p) => {
+                for part in [&mut p.mass, &mut p.damping, &mut p.stiffness] {
+                    part.iter_mut().for_each(|x| v.real("structure", x));
+                }
+            }
+        }
+    }
+
+    /// Whether every number is finite.
+    pub(crate) fn is_finite(&self) -> bool {
+        match self {
+            SecondOrder::Banded(p) => p.is_finite(),
+            SecondOrder::Dense(p) => {
+                [&p.mass, &p.damping, &p.stiffness].iter().all(|m| m.iter().all(|x| x.is_finite()))
+            }
+        }
+    }
+
+    /// The Newton matrix for `gamma` factored; `None` if it is singular.
+    pub fn factor(&self, gamma: f64) -> Option<SecondOrderLu> {
+        match self {
+            SecondOrder::Banded(p) => p.factor(gamma).map(SecondOrderLu::Banded),
+            SecondOrder::Dense(p) => {
+                let t = &p.mass + &p.damping * gamma + &p.stiffness * (gamma * gamma);
+                if !t.iter().all(|x| x.is_finite()) {
+                    return None;
+                }
+                let lu = t.lu();
+                lu.is_invertible().then_some(SecondOrderLu::Dense { gamma, lu })
+            }
+        }
+    }
+
+    /// The dense Jacobian J of the first-order system, 2m×2m: [[0, I], [−M⁻¹S, −M⁻¹C]].
+    /// `None` if M is singular.
+    pub fn dense_jacobian(&self) -> Option<DMatrix<f64>> {
+        match self {
+            SecondOrder::Banded(p) => p.dense_jacobian(),
+            SecondOrder::Dense(p) => {
+                let m = p.mass.nrows();
+                let lu = p.mass.clone().lu();
+                let mut j = DMatrix::zeros(2 * m, 2 * m);
+                for k in 0..m {
+                    j[(k, m + k)] = 1.0;
+                }
+                for (offset, part) in [(0, &p.stiffness), (m, &p.damping)] {
+                    let x = lu.solve(&(-part))?;
+                    j.view_mut((m, offset), (m, m)).copy_from(&x);
+                }
+                Some(j)
+            }
+        }
+    }
+}
+
+impl SecondOrderLu {
+    /// Solves (I − γJ)(dx, dẋ) = (r1, r2) in place, `r` = (r1, r2) of 2m entries, with the
+    /// parts this was factored from.
+    pub fn solve(&self, parts: &SecondOrder, r: &mut [f64]) {
+        match (self, parts) {
+            (SecondOrderLu::Banded(lu), SecondOrder::Banded(p)) => lu.solve(p, r),
+            (SecondOrderLu::Dense { gamma, lu }, SecondOrder::Dense(p)) => {
+                let m = p.mass.nrows();
+                let (r1, r2) = r.split_at_mut(m);
+                let (v1, v2) = (DVector::from_column_slice(r1), DVector::from_column_slice(r2));
+                let b = &p.mass * v2 - &p.stiffness * v1 * *gamma;
+                let dv = lu.solve(&b).unwrap_or_else(|| DVector::from_element(m, f64::NAN));
+                for ((x, v), d) in r1.iter_mut().zip(r2.iter_mut()).zip(dv.iter()) {
+                    *x += gamma * d;
+                    *v = *d;
+                }
+            }
+            _ => r.fill(f64::NAN),
+        }
+    }
+}
+
+/// The three parts of a second-order system's Jacobian at a point, each a band and a rank-one
+/// term.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandedParts {
     /// M, the mass matrix.
     pub mass: BandRankOne,
     /// C = ∂R/∂ẋ.
@@ -60,9 +205,9 @@ pub struct SecondOrder {
     pub stiffness: BandRankOne,
 }
 
-/// [`SecondOrder`]'s Newton matrix factored for one γ.
+/// [`BandedParts`]' Newton matrix factored for one γ.
 #[derive(Clone, Debug)]
-pub struct SecondOrderLu {
+pub struct BandedLu {
     gamma: f64,
     lu: BandLu,
     /// Z = T_band⁻¹ U, the three columns of U = (u_M, u_C, u_S).
@@ -72,7 +217,7 @@ pub struct SecondOrderLu {
     capacitance: nalgebra::LU<f64, nalgebra::U3, nalgebra::U3>,
 }
 
-impl SecondOrder {
+impl BandedParts {
     /// The m×m zero parts.
     pub fn zeros(m: usize) -> Self {
         let z = BandRankOne::zeros(m);
@@ -105,7 +250,7 @@ impl SecondOrder {
     }
 
     /// The Newton matrix for `gamma` factored; `None` if it is singular.
-    pub fn factor(&self, gamma: f64) -> Option<SecondOrderLu> {
+    pub fn factor(&self, gamma: f64) -> Option<BandedLu> {
         let scale = [1.0, gamma, gamma * gamma];
         let mut t = self.mass.band.clone();
         t.add_scaled(gamma, &self.damping.band);
@@ -124,7 +269,7 @@ impl SecondOrder {
         if !capacitance.is_invertible() || !cap.iter().all(|x| x.is_finite()) {
             return None;
         }
-        Some(SecondOrderLu { gamma, lu, z, v, capacitance })
+        Some(BandedLu { gamma, lu, z, v, capacitance })
     }
 
     /// The dense Jacobian J of the first-order system, 2m×2m: [[0, I], [−M⁻¹S, −M⁻¹C]].
@@ -132,7 +277,7 @@ impl SecondOrder {
     /// and the state, at each Jacobian, not each step.
     pub fn dense_jacobian(&self) -> Option<DMatrix<f64>> {
         let m = self.coordinates();
-        let mass = SecondOrder { mass: self.mass.clone(), ..SecondOrder::zeros(m) }.factor(0.0)?;
+        let mass = BandedParts { mass: self.mass.clone(), ..BandedParts::zeros(m) }.factor(0.0)?;
         let mut j = DMatrix::zeros(2 * m, 2 * m);
         for k in 0..m {
             j[(k, m + k)] = 1.0;
@@ -152,10 +297,10 @@ impl SecondOrder {
     }
 }
 
-impl SecondOrderLu {
+impl BandedLu {
     /// Solves (I − γJ)(dx, dẋ) = (r1, r2) in place, `r` = (r1, r2) of 2m entries, with the
     /// parts this was factored from.
-    pub fn solve(&self, parts: &SecondOrder, r: &mut [f64]) {
+    pub fn solve(&self, parts: &BandedParts, r: &mut [f64]) {
         let m = parts.coordinates();
         let (r1, r2) = r.split_at_mut(m);
         // b = M r2 − γ S r1, then dẋ = (M + γC + γ²S)⁻¹ b, dx = r1 + γ dẋ.
@@ -185,11 +330,10 @@ impl SecondOrderLu {
 mod tests {
     use super::*;
     use crate::math;
-    use nalgebra::DVector;
 
     /// Parts of a small system with every entry of its band and vectors set.
-    fn parts(m: usize) -> SecondOrder {
-        let mut s = SecondOrder::zeros(m);
+    fn parts(m: usize) -> BandedParts {
+        let mut s = BandedParts::zeros(m);
         let mut k = 0.0_f64;
         for (p, (diag, spread)) in [
             (&mut s.mass, (5.0, 0.3)),
@@ -229,10 +373,20 @@ mod tests {
                 let newton = DMatrix::identity(2 * m, 2 * m) - &j * gamma;
                 let r = DVector::from_fn(2 * m, |i, _| math::sin(1.3 * i as f64) + 0.2);
                 let want = newton.lu().solve(&r).unwrap();
-                let mut x: Vec<f64> = r.iter().copied().collect();
-                s.factor(gamma).unwrap().solve(&s, &mut x);
-                let err = (DVector::from_vec(x) - &want).amax();
-                assert!(err <= 1e-10 * want.amax(), "m {m}, gamma {gamma}: {err}");
+                let banded = SecondOrder::Banded(s.clone());
+                let dense = SecondOrder::Dense(DenseParts {
+                    mass: s.mass.dense(),
+                    damping: s.damping.dense(),
+                    stiffness: s.stiffness.dense(),
+                });
+                for parts in [&banded, &dense] {
+                    let mut x: Vec<f64> = r.iter().copied().collect();
+                    parts.factor(gamma).unwrap().solve(parts, &mut x);
+                    let err = (DVector::from_vec(x) - &want).amax();
+                    assert!(err <= 1e-10 * want.amax(), "m {m}, gamma {gamma}: {err}");
+                }
+                let jd = dense.dense_jacobian().unwrap();
+                assert!((&jd - &j).amax() < 1e-10 * j.amax(), "m {m}");
             }
         }
     }

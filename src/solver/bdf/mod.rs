@@ -11,7 +11,7 @@ use super::config::BdfConfig;
 use super::error::SolverError;
 use super::guard::StabilityGuard;
 use super::lu::Lu;
-use super::second_order::{SecondOrder, SecondOrderLu};
+use super::second_order::{Layout, SecondOrder, SecondOrderLu};
 use super::snapshot::{
     require, require_finite, require_non_negative, require_not_below_zero, visit_matrix,
     visit_usize, visit_vector, StateVisitor, MAX_COUNT,
@@ -182,7 +182,7 @@ where
     /// With [`set_second_order`](Self::set_second_order): the system's structured Jacobian
     /// at the point of `jac` (`jac` is then its dense copy, for the guard), and the O(n)
     /// factorisation of the Newton matrix in place of `lu`.
-    second_order: bool,
+    second_order: Option<Layout>,
     structure: Option<SecondOrder>,
     structured: Option<SecondOrderLu>,
     gamma: f64,
@@ -238,7 +238,7 @@ where
             jac: OMatrix::zeros_generic(d, d),
             jac_valid: false,
             lu: None,
-            second_order: false,
+            second_order: None,
             structure: None,
             structured: None,
             gamma: 0.0,
@@ -259,10 +259,10 @@ where
 
     /// Newton by the system's structured Jacobian ([`OdeSystem::second_order`]) where it gives
     /// one, before the first step: O(n) a step for a mechanical system of banded coordinates.
-    /// It changes the saved state's layout ([`visit_state`](Self::visit_state)), so a reader
-    /// sets it as the writer did.
-    pub fn set_second_order(&mut self, on: bool) {
-        self.second_order = on;
+    /// `layout` is the one the system's parts come in. It changes the saved state's layout
+    /// ([`visit_state`](Self::visit_state)), so a reader sets it as the writer did.
+    pub fn set_second_order(&mut self, layout: Option<Layout>) {
+        self.second_order = layout;
     }
 
     /// Whether the Newton matrix is factored (densely or structured).

@@ -108,7 +108,9 @@ where
         let n = y.len();
         self.stats.jac_evals += 1;
         self.steps_at_jac = self.stats.steps;
-        let structure = if self.second_order { sys.second_order(self.t, &y) } else { None };
+        let structure = self
+            .second_order
+            .and_then(|layout| sys.second_order(self.t, &y).filter(|s| s.layout() == layout));
         let dense = structure.as_ref().map(|s| {
             let d = y.shape_generic().0;
             s.dense_jacobian()

@@ -2,7 +2,7 @@
 //! one: every value it could not have produced is refused before it is used.
 
 use super::*;
-use crate::solver::second_order::SecondOrder;
+use crate::solver::second_order::{Layout, SecondOrder};
 
 impl<D: Dim> Bdf<D>
 where
@@ -59,8 +59,8 @@ where
         visit_matrix(v, "jac", &mut self.jac);
         v.flag("jac_valid", &mut self.jac_valid);
         let mut has_lu = self.has_factor();
-        if self.second_order {
-            self.visit_structure(v, &mut has_lu);
+        if let Some(layout) = self.second_order {
+            self.visit_structure(v, layout, &mut has_lu);
         } else {
             v.flag("lu", &mut has_lu);
             let d = self.jac.shape_generic().0;
@@ -73,7 +73,7 @@ where
         }
         v.real("gamma", &mut self.gamma);
         v.real("gamma_lu", &mut self.gamma_lu);
-        if self.second_order {
+        if self.second_order.is_some() {
             // The structured factorisation is not saved: it follows from the parts and γ of
             // the factorisation, bit for bit.
             self.structured = match (&self.structure, has_lu) {
@@ -111,14 +111,19 @@ where
     /// `structure` (flag: the structured Jacobian is present), its numbers
     /// ([`SecondOrder::visit`]: zeros when absent, then discarded on reading), `lu` (flag: a
     /// factorisation is present, computed again from them on reading).
-    fn visit_structure<V: StateVisitor + ?Sized>(&mut self, v: &mut V, has_lu: &mut bool) {
+    fn visit_structure<V: StateVisitor + ?Sized>(
+        &mut self,
+        v: &mut V,
+        layout: Layout,
+        has_lu: &mut bool,
+    ) {
         let mut present = self.structure.is_some();
         v.flag("structure", &mut present);
         let m = self.jac.nrows() / 2;
-        let mut parts = self.structure.clone().unwrap_or_else(|| SecondOrder::zeros(m));
+        let mut parts = self.structure.clone().unwrap_or_else(|| SecondOrder::zeros(layout, m));
         parts.visit(v);
         if !present {
-            v.discarded("structure", parts == SecondOrder::zeros(m));
+            v.discarded("structure", parts == SecondOrder::zeros(layout, m));
         }
         self.structure = present.then_some(parts);
         v.flag("lu", has_lu);
