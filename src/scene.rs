@@ -299,7 +299,9 @@ impl Scene {
             ));
         }
         let i = self.initial;
-        if self.range_check == RangeCheck::Stop {
+        // The exact beam holds at any rotation: its one limit (a centreline that crosses
+        // itself) is checked along the run.
+        if self.range_check == RangeCheck::Stop && self.params.beam == BeamModel::Quadratic {
             let l = self.params.l;
             if i.v1.abs() > l {
                 return Err(format!(

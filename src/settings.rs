@@ -73,7 +73,8 @@ pub const PHI_INTERPOLATION_TYPE: EnumType = EnumType {
 pub const RANGE_CHECK_TYPE: EnumType = EnumType {
     name: "RangeCheck",
     description: "What a step does when the state leaves the range of validity of the equations \
-                  (|v1| <= l, |theta1| <= pi/2, the dae formulation's drift)",
+                  (the quadratic beam: |v1| <= l, |theta1| <= pi/2, the dae formulation's drift; \
+                  the exact beam: a centreline that crosses itself)",
     items: &[
         ("stop", "the run ends there with a message (the FMU: fmi2Discard)"),
         ("warn", "a warning, once (the FMU: fmi2Warning); the run goes on"),
@@ -94,7 +95,7 @@ pub const COLUMNS_TYPE: EnumType = EnumType {
         (
             "shape",
             "those, then every node's deflection and slope, v_k and theta_k at x = k*l/n, k = \
-             1..n (node n is the tip)",
+             1..n (node n is the tip; the exact beam: at the arc length k*l/n)",
         ),
     ],
 };
@@ -615,7 +616,8 @@ pub const SETTINGS: [Setting; 37] = [
         Kind::Choice(&RANGE_CHECK_TYPE),
         Finite,
         Choice(0),
-        "Outside the range of validity (|v1| <= l, |theta1| <= pi/2, ...): stop, warn or off",
+        "Outside the range of validity (|v1| <= l, |theta1| <= pi/2, ...; the exact beam: a \
+         centreline that crosses itself): stop, warn or off",
         FMU,
     ),
     row(K::TEnd, "t_end", real("s"), Positive, Real(10.0), "End time of a CLI run", NOWHERE),

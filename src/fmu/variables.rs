@@ -317,17 +317,34 @@ pub const VARIABLES: &[Variable] = &[
         Var::MRoot,
         "M_root",
         "N.m",
-        "Bending moment of the beam at the clamp, EI*v''(0) (the clamp's consistent reaction)",
+        "Bending moment of the beam at the clamp, EI*v''(0) (the clamp's consistent reaction; the \
+         exact beam: from the balance of angular momentum)",
     ),
     output(
         Var::QRoot,
         "Q_root",
         "N",
-        "Shear force of the beam at the clamp, EI*v'''(0) (the clamp's consistent reaction)",
+        "Shear force of the beam at the clamp, EI*v'''(0) (the clamp's consistent reaction; the \
+         exact beam: from the balance of momentum)",
     ),
-    output(Var::VQuarter, "v_quarter", "m", "Deflection of the beam at x = l/4"),
-    output(Var::VMid, "v_mid", "m", "Deflection of the beam at x = l/2"),
-    output(Var::VThreeQuarter, "v_three_quarter", "m", "Deflection of the beam at x = 3l/4"),
+    output(
+        Var::VQuarter,
+        "v_quarter",
+        "m",
+        "Deflection of the beam at x = l/4 (the exact beam: at arc length l/4)",
+    ),
+    output(
+        Var::VMid,
+        "v_mid",
+        "m",
+        "Deflection of the beam at x = l/2 (the exact beam: at arc length l/2)",
+    ),
+    output(
+        Var::VThreeQuarter,
+        "v_three_quarter",
+        "m",
+        "Deflection of the beam at x = 3l/4 (the exact beam: at arc length 3l/4)",
+    ),
     param(Var::Beam, Key::Beam),
     param(Var::BeamGravity, Key::BeamGravity),
 ];

@@ -23,9 +23,14 @@ pub enum BeamN {
 impl BeamN {
     /// The model `params.beam` names. The exact beam takes the reduced formulation only: it
     /// has no inextensibility constraint to relax (it holds by construction), and its
-    /// linearisation is the quadratic model's.
+    /// linearisation is the quadratic model's. The beam's weight is the exact beam's only.
     pub fn new(params: Params, formulation: Formulation) -> Result<Self, String> {
         match params.beam {
+            BeamModel::Quadratic if params.beam_gravity => Err(
+                "`beam_gravity` = true needs `beam` = exact: the quadratic model is the paper's \
+                 beam, which has no weight of its own"
+                    .to_string(),
+            ),
             BeamModel::Quadratic => BeamBodyN::new(params).map(BeamN::Quadratic),
             BeamModel::Exact if formulation != Formulation::Reduced => Err(format!(
                 "`formulation` = {formulation} needs `beam` = quadratic: the exact beam is \
@@ -47,6 +52,54 @@ impl BeamN {
     /// The number of coordinates, 2n.
     pub fn dofs(&self) -> usize {
         self.quadratic().dofs()
+    }
+
+    /// The static equilibrium q at a held φ (of the linear equations with `linear`, which the
+    /// exact beam shares with the quadratic one).
+    pub fn equilibrium(&self, phi_fixed: f64, linear: bool) -> Option<DVector<f64>> {
+        match self {
+            BeamN::Exact(m) if !linear => m.equilibrium(phi_fixed),
+            _ => self.quadratic().equilibrium(phi_fixed, linear),
+        }
+    }
+
+    /// The small oscillations' ω², ascending, about the equilibrium at a held φ, with it.
+    pub fn modes(&self, phi_fixed: f64) -> Option<(DVector<f64>, Vec<f64>)> {
+        match self {
+            BeamN::Quadratic(m) => m.modes(phi_fixed),
+            BeamN::Exact(m) => m.modes(phi_fixed),
+        }
+    }
+
+    /// The tip's deflection and slope (v1, ϑ1) at q: the tip's coordinates of the quadratic
+    /// beam, r_y(l) and α(l) of the exact one.
+    pub fn tip_values(&self, q: &[f64]) -> (f64, f64) {
+        match self {
+            BeamN::Quadratic(m) => {
+                let t = m.beam.tip();
+                (q[t], q[t + 1])
+            }
+            BeamN::Exact(m) => m.tip_values(q),
+        }
+    }
+
+    /// Every node's deflection and slope (v_k, ϑ_k), k = 1..n, the tip last: the
+    /// coordinates of the quadratic beam; the centreline's y = r_y(s_k) and the section angle
+    /// α(s_k) of the exact one, at the arc length s_k = k·l/n.
+    pub fn nodal_shape(&self, q: &[f64]) -> Vec<f64> {
+        match self {
+            BeamN::Quadratic(_) => q.to_vec(),
+            BeamN::Exact(m) => {
+                let zero = vec![0.0; q.len()];
+                let (n, l) = (q.len() / 2, m.params().l);
+                (1..=n)
+                    .flat_map(|k| {
+                        let s = l * k as f64 / n as f64;
+                        [m.point(q, &zero, &zero, s).r[1], q[2 * k - 1]]
+                    })
+                    .collect()
+            }
+        }
     }
 
     /// The system on piece `phi`.

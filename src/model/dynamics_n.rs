@@ -347,54 +347,18 @@ impl BeamBodyN {
         DVector::from_vec(acc)
     }
 
-    /// −∂r/∂q of a residual r at q, by central differences (for r = F(q) at rest: the
-    /// tangent stiffness).
-    fn negative_jacobian(
-        r: impl Fn(&DVector<f64>) -> DVector<f64>,
-        q: &DVector<f64>,
-    ) -> DMatrix<f64> {
-        let n = q.len();
-        let mut kt = DMatrix::zeros(n, n);
-        for j in 0..n {
-            let e = 1e-7 * (1.0 + q[j].abs());
-            let (mut plus, mut minus) = (q.clone(), q.clone());
-            plus[j] += e;
-            minus[j] -= e;
-            kt.set_column(j, &(-(r(&plus) - r(&minus)) / (2.0 * e)));
-        }
-        kt
-    }
-
     /// The tangent stiffness −∂F/∂q at rest.
     fn tangent_stiffness(&self, phi_fixed: f64, q: &DVector<f64>) -> DMatrix<f64> {
-        Self::negative_jacobian(|q| self.force_at_rest(phi_fixed, q), q)
-    }
-
-    /// The q where `r` vanishes, by Newton's method from the straight beam, to a step of 1e-11
-    /// of the coordinates (the Jacobian by differences of a beam of many elements limits it);
-    /// `None` if it does not converge.
-    fn rest(&self, r: impl Fn(&DVector<f64>) -> DVector<f64>) -> Option<DVector<f64>> {
-        let mut q = DVector::zeros(self.dofs());
-        for _ in 0..50 {
-            let dq = Self::negative_jacobian(&r, &q).lu().solve(&r(&q))?;
-            q += &dq;
-            if !q.iter().all(|x| x.is_finite()) {
-                return None;
-            }
-            if dq.norm() < 1e-11 * (1.0 + q.norm()) {
-                return Some(q);
-            }
-        }
-        None
+        negative_jacobian(|q| self.force_at_rest(phi_fixed, q), q)
     }
 
     /// The static equilibrium q at a held φ, F(q, 0) = 0 (of the linear equations with
     /// `linear`).
     pub fn equilibrium(&self, phi_fixed: f64, linear: bool) -> Option<DVector<f64>> {
         if linear {
-            self.rest(|q| self.linear_at_rest(phi_fixed, q))
+            rest(self.dofs(), |q| self.linear_at_rest(phi_fixed, q))
         } else {
-            self.rest(|q| self.force_at_rest(phi_fixed, q))
+            rest(self.dofs(), |q| self.force_at_rest(phi_fixed, q))
         }
     }
 
@@ -418,18 +382,7 @@ impl BeamBodyN {
         let m2 = self.params.m2;
         let mass = DMatrix::from_fn(n, n, |i, j| b.get(i, j) + m2 * a[i] * a[j]);
         let kt = self.tangent_stiffness(phi_fixed, &q);
-        // M⁻¹K_t is similar to L⁻¹K_t L⁻ᵀ with M = LLᵀ: a symmetric eigenproblem, whose unit
-        // eigenvectors y give the mass-normalised shapes L⁻ᵀy.
-        let l = mass.cholesky()?.l();
-        let linv = l.try_inverse()?;
-        let sym = &linv * (&kt + kt.transpose()) * 0.5 * linv.transpose();
-        let eigen = sym.symmetric_eigen();
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
-        let omega2 = order.iter().map(|&k| eigen.eigenvalues[k]).collect();
-        let shapes = DMatrix::from_fn(n, n, |i, k| {
-            (linv.transpose() * eigen.eigenvectors.column(order[k]))[i]
-        });
+        let (omega2, shapes) = small_oscillations(mass, &kt)?;
         Some((q, omega2, shapes))
     }
 
@@ -437,6 +390,62 @@ impl BeamBodyN {
     pub fn beam_energy(&self, q: &[f64], qd: &[f64]) -> (f64, f64) {
         (0.5 * self.beam.mass.form(qd, qd), 0.5 * self.beam.stiffness.form(q, q))
     }
+}
+
+/// −∂r/∂q of a residual r at q, by central differences (for r = F(q) at rest: the tangent
+/// stiffness).
+pub(super) fn negative_jacobian(
+    r: impl Fn(&DVector<f64>) -> DVector<f64>,
+    q: &DVector<f64>,
+) -> DMatrix<f64> {
+    let n = q.len();
+    let mut kt = DMatrix::zeros(n, n);
+    for j in 0..n {
+        let e = 1e-7 * (1.0 + q[j].abs());
+        let (mut plus, mut minus) = (q.clone(), q.clone());
+        plus[j] += e;
+        minus[j] -= e;
+        kt.set_column(j, &(-(r(&plus) - r(&minus)) / (2.0 * e)));
+    }
+    kt
+}
+
+/// The q of `n` coordinates where `r` vanishes, by Newton's method from the straight beam, to a
+/// step of 1e-11 of the coordinates (the Jacobian by differences of a beam of many elements
+/// limits it); `None` if it does not converge.
+pub(super) fn rest(n: usize, r: impl Fn(&DVector<f64>) -> DVector<f64>) -> Option<DVector<f64>> {
+    let mut q = DVector::zeros(n);
+    for _ in 0..50 {
+        let dq = negative_jacobian(&r, &q).lu().solve(&r(&q))?;
+        q += &dq;
+        if !q.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        if dq.norm() < 1e-11 * (1.0 + q.norm()) {
+            return Some(q);
+        }
+    }
+    None
+}
+
+/// Squared angular frequencies, ascending, and the mass-normalised shapes (columns) of the
+/// small oscillations M ẍ + K_t x = 0. M⁻¹K_t is similar to L⁻¹K_t L⁻ᵀ with M = LLᵀ: a
+/// symmetric eigenproblem (K_t symmetrised), whose unit eigenvectors y give the shapes L⁻ᵀy.
+/// `None` if M is not positive definite.
+pub(super) fn small_oscillations(
+    mass: DMatrix<f64>,
+    kt: &DMatrix<f64>,
+) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let n = mass.nrows();
+    let linv = mass.cholesky()?.l().try_inverse()?;
+    let sym = &linv * (kt + kt.transpose()) * 0.5 * linv.transpose();
+    let eigen = sym.symmetric_eigen();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
+    let omega2 = order.iter().map(|&k| eigen.eigenvalues[k]).collect();
+    let shapes =
+        DMatrix::from_fn(n, n, |i, k| (linv.transpose() * eigen.eigenvectors.column(order[k]))[i]);
+    Some((omega2, shapes))
 }
 
 #[cfg(test)]

@@ -36,12 +36,12 @@
 //! model is conserved exactly.
 
 use super::dense::{cholesky_in_place, cholesky_solve};
-use super::dynamics_n::{BeamBodyN, MAX_ELEMENTS};
+use super::dynamics_n::{negative_jacobian, rest, small_oscillations, BeamBodyN, MAX_ELEMENTS};
 use super::elements::shape;
 use super::params::Params;
 use super::phi::Phi;
 use crate::math;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 /// Gauss–Legendre points per element along s.
 pub const GAUSS_POINTS: usize = 6;
@@ -442,6 +442,37 @@ impl ExactBeam {
     /// The tip's motion r(l), ṙ(l), r̈(l) for the accelerations `qdd`.
     pub fn tip(&self, q: &[f64], qd: &[f64], qdd: &[f64]) -> PointMotion {
         self.point(q, qd, qdd, self.quadratic.beam.l)
+    }
+
+    /// The generalised force −R(q, 0, 0) at rest with the body held at `phi_fixed`.
+    fn force_at_rest(&self, phi_fixed: f64, q: &DVector<f64>) -> DVector<f64> {
+        let held = Phi { phi: phi_fixed, ..Phi::default() };
+        let zero = vec![0.0; q.len()];
+        let mut r = vec![0.0; q.len()];
+        self.residual(&held, q.as_slice(), &zero, &zero, &mut r);
+        -DVector::from_vec(r)
+    }
+
+    /// The static equilibrium q with the body held at `phi_fixed`, by Newton's method from the
+    /// straight beam; `None` if it does not converge.
+    pub fn equilibrium(&self, phi_fixed: f64) -> Option<DVector<f64>> {
+        rest(self.dofs(), |q| self.force_at_rest(phi_fixed, q))
+    }
+
+    /// Squared angular frequencies ω² [rad²/s²], ascending, of the small oscillations about
+    /// the static equilibrium at a held φ, with that equilibrium (as
+    /// [`BeamBodyN::modes`]).
+    pub fn modes(&self, phi_fixed: f64) -> Option<(DVector<f64>, Vec<f64>)> {
+        let q = self.equilibrium(phi_fixed)?;
+        let kt = negative_jacobian(|q| self.force_at_rest(phi_fixed, q), &q);
+        let (omega2, _) = small_oscillations(self.mass_matrix(q.as_slice(), phi_fixed), &kt)?;
+        Some((q, omega2))
+    }
+
+    /// The tip's deflection v1 = r_y(l) and slope ϑ1 = α_n at q.
+    pub fn tip_values(&self, q: &[f64]) -> (f64, f64) {
+        let zero = vec![0.0; q.len()];
+        (self.tip(q, &zero, &zero).r[1], q[q.len() - 1])
     }
 
     /// Every Gauss point's arc length, weight and motion, element by element, and the tip's

@@ -162,6 +162,40 @@ impl OdeSystem<Dyn> for ExactSystem<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Params;
+
+    /// A beam bent into a circular arc (α = c s/l, which the elements hold exactly) crosses
+    /// itself once the arc exceeds a full turn, and not before.
+    #[test]
+    fn an_arc_beyond_a_full_turn_is_out_of_range() {
+        let params =
+            Params { n_elements: 4, beam: crate::model::BeamModel::Exact, ..Params::default() };
+        let model = ExactBeam::new(params).unwrap();
+        let l = params.l;
+        let state = |c: f64| {
+            let mut y = DVector::zeros(16);
+            for k in 1..=4 {
+                let s = l * k as f64 / 4.0;
+                y[2 * k - 2] = c * s * s / (2.0 * l);
+                y[2 * k - 1] = c * s / l;
+            }
+            y
+        };
+        let phi = PhiPiece::Hold(0.0);
+        let sys = ExactSystem { model: &model, phi, range_check: true };
+        let pi = std::f64::consts::PI;
+        assert!(sys.check_range(0.0, &state(0.9 * pi)).is_ok());
+        assert!(sys.check_range(0.0, &state(1.8 * pi)).is_ok());
+        let e = sys.check_range(0.0, &state(2.4 * pi)).unwrap_err();
+        assert_eq!(e.name, "beam");
+        // The tip of a 432° arc comes back over the part 72° behind the start of the circle.
+        assert!(e.value > 0.0 && e.value < l / 2.0, "{}", e.value);
+        let off = ExactSystem { range_check: false, ..sys };
+        assert!(off.check_range(0.0, &state(2.4 * pi)).is_ok());
+        let mut nan = state(0.5);
+        nan[3] = f64::NAN;
+        assert_eq!(off.check_range(0.0, &nan).unwrap_err().name, "q");
+    }
 
     #[test]
     fn segments_cross_only_inside() {

@@ -580,15 +580,17 @@ impl Run {
     }
 
     /// The coordinates q at `t` inside the last step (dense output) into `out`: every node's
-    /// (v_k, ϑ_k), k = 1..n, the tip last; (v1, ϑ1) for the paper's model.
+    /// (v_k, ϑ_k), k = 1..n, the tip last ([`BeamN::nodal_shape`]); (v1, ϑ1) for the paper's
+    /// model.
     pub fn coordinates_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
         out.clear();
         match &self.bdf {
             Integrator::TwoDof(b) => out.extend_from_slice(&b.interpolate(t)?.as_slice()[..2]),
             Integrator::Dae(b) => out.extend_from_slice(&b.interpolate(t)?.as_slice()[..2]),
             Integrator::Elements(b) => {
-                let n = self.elements().map_or(1, |m| m.dofs());
-                out.extend_from_slice(&b.interpolate(t)?.as_slice()[..n]);
+                let model = self.elements().expect("a run of elements has its model");
+                let y = b.interpolate(t)?;
+                out.extend(model.nodal_shape(&y.as_slice()[..model.dofs()]));
             }
         }
         Ok(())

@@ -59,9 +59,8 @@ impl Study {
                     .map_err(|e| e.to_string())
                     .map(|m| m.equilibrium(scene.law.phi_end, linear).map(|(v1, _)| v1))
             } else {
-                BeamBodyN::new(scene.params).map(|m| {
-                    let tip = m.beam.tip();
-                    m.equilibrium(scene.law.phi_end, linear).map(|q| q[tip])
+                BeamN::new(scene.params, scene.formulation).map(|m| {
+                    m.equilibrium(scene.law.phi_end, linear).map(|q| m.tip_values(q.as_slice()).0)
                 })
             };
             match equilibrium {

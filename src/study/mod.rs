@@ -20,7 +20,7 @@ pub use axis::{Axis, Distribution};
 pub use runner::run_cases;
 pub use sample::{normal_cdf, normal_quantile};
 
-use crate::model::{BeamBody, BeamBodyN, Formulation};
+use crate::model::{BeamBody, BeamN, Formulation};
 use crate::scene::locate;
 use crate::settings::{Setting, SETTINGS};
 use crate::sim::{simulate_steps, Scene, SimError};

@@ -2,7 +2,7 @@
 
 use crate::args::scene_args;
 use crate::{print, CmdResult};
-use beam_body::model::{BeamBody, BeamBodyN};
+use beam_body::model::{BeamBody, BeamN};
 use std::f64::consts::PI;
 use std::ffi::OsString;
 use std::fmt::Write;
@@ -22,13 +22,12 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
             rows.push((label, m.equilibrium, m.omega2.to_vec()));
         }
     } else {
-        let model = BeamBodyN::new(params)?;
-        let tip = model.beam.tip();
+        let model = BeamN::new(params, cli.scene.formulation)?;
         for (label, phi) in angles {
             let (q, omega2) = model.modes(phi).ok_or_else(|| {
                 format!("no static equilibrium found with the body held at phi = {label}")
             })?;
-            rows.push((label, (q[tip], q[tip + 1]), omega2));
+            rows.push((label, model.tip_values(q.as_slice()), omega2));
         }
     }
     let count = cli.count.unwrap_or(2).min(rows[0].2.len());

@@ -62,6 +62,7 @@ What the penalty costs (measured with tests/python/peers/test_exudyn_peer.py's c
 from __future__ import annotations
 
 import math
+import time
 from typing import NamedTuple
 
 import numpy as np
@@ -75,6 +76,7 @@ class PeerRun(NamedTuple):
     theta1: np.ndarray  # rad, angle of the tip's tangent
     u2: np.ndarray  # m, x_tip − l (with the elastic stretch)
     M: np.ndarray  # N·m, moment of the body on the beam tip (the CLI's convention)
+    solve_s: float = math.nan  # s, wall time of SolveDynamic alone (the integration; not the model's build)
 
 
 def phi_law(t: float, phi_end: float, t_rot: float) -> tuple[float, float]:
@@ -104,6 +106,8 @@ def simulate(
     t_out=None,
     rho_inf: float = 0.9,
     newton_tol: float = 1e-12,
+    hinge: str = "generic",
+    consistent_start: bool | None = None,
 ) -> PeerRun:
     """Runs the EXUDYN model; returns PeerRun(t, v1, theta1, u2, M).
 
@@ -112,12 +116,21 @@ def simulate(
     be an integer to 1e-9); EA the axial stiffness (penalty for inextensibility); rho_inf the
     generalized-α spectral radius (< 1); newton_tol the Newton increment tolerance. Rows at every step, or at the times t_out (those on the step grid
     are taken as computed, others are interpolated by a cubic spline through the steps).
+
+    hinge: "generic" (ObjectJointGeneric with a Tait–Bryan offset, the default) or "revolute"
+    (ObjectJointRevolute2D + MarkerBodiesRelativeRotationCoordinate + ObjectConnectorCoordinate with the
+    φ(t) offset); see the module's docstring. consistent_start: start from the consistent initial
+    accelerations (with φ''(0)) instead of EXUDYN's own (without it); None means True for "revolute" and
+    False for "generic" (the generic joint's runs, and the figures of test_exudyn_peer.py, keep EXUDYN's
+    own start).
     """
     import exudyn as exu
     from exudyn.itemInterface import (
+        MarkerBodiesRelativeRotationCoordinate,
         MarkerBodyPosition,
         MarkerBodyRigid,
         MarkerNodeCoordinate,
+        NodeGenericData,
         NodePoint2DSlope1,
         NodePointGround,
         NodeRigidBody2D,
@@ -125,6 +138,7 @@ def simulate(
         ObjectConnectorCoordinate,
         ObjectGround,
         ObjectJointGeneric,
+        ObjectJointRevolute2D,
         ObjectRigidBody2D,
         LoadForceVector,
         SensorBody,
@@ -137,6 +151,12 @@ def simulate(
         raise ValueError(f"unknown parameters {sorted(unknown)}")
     if not 0.0 <= rho_inf < 1.0:
         raise ValueError("rho_inf must be in [0, 1) for index-3 constraints")
+    if hinge not in ("generic", "revolute"):
+        raise ValueError(f"hinge must be 'generic' or 'revolute', not {hinge!r}")
+    if consistent_start is None:
+        consistent_start = hinge == "revolute"
+    if consistent_start and hinge != "revolute":
+        raise ValueError("consistent_start needs hinge='revolute' (the drive as one coordinate constraint)")
     n = int(n_elements)
     if n < 1:
         raise ValueError("n_elements must be >= 1")
@@ -186,25 +206,62 @@ def simulate(
     n_body = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[l + r, 0.0, 0.0], initialCoordinates=[l * eps0, 0.0, 0.0]))
     o_body = mbs.AddObject(ObjectRigidBody2D(mass=M2, inertia=J_C, nodeNumber=n_body))
 
-    # driven hinge (ObjectJointGeneric.rst, offsetUserFunction(mbs, t, itemNumber, parameters))
-    m_tip = mbs.AddMarker(MarkerBodyRigid(bodyNumber=elements[-1], localPosition=[Le, 0.0, 0.0]))
-    m_hinge = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_body, localPosition=[-r, 0.0, 0.0]))
+    def offset_phi(t: float) -> float:
+        return phi_law(t, phi_end, t_rot)[0]
 
-    def offset(mbs_, t, item, par):
-        return [0.0, 0.0, 0.0, 0.0, 0.0, phi_law(t, phi_end, t_rot)[0]]
+    def offset_dphi(t: float) -> float:
+        return phi_law(t, phi_end, t_rot)[1]
 
-    def offset_t(mbs_, t, item, par):
-        return [0.0, 0.0, 0.0, 0.0, 0.0, phi_law(t, phi_end, t_rot)[1]]
+    hidden = {"show": False, "drawSize": -1.0, "color": [-1.0, -1.0, -1.0, -1.0]}
+    if hinge == "generic":
+        # driven hinge (ObjectJointGeneric.rst, offsetUserFunction(mbs, t, itemNumber, parameters))
+        m_tip = mbs.AddMarker(MarkerBodyRigid(bodyNumber=elements[-1], localPosition=[Le, 0.0, 0.0]))
+        m_hinge = mbs.AddMarker(MarkerBodyRigid(bodyNumber=o_body, localPosition=[-r, 0.0, 0.0]))
 
-    o_joint = mbs.AddObject(
-        ObjectJointGeneric(
-            markerNumbers=[m_tip, m_hinge],
-            constrainedAxes=[1, 1, 0, 0, 0, 1],
-            offsetUserFunction=offset,
-            offsetUserFunction_t=offset_t,
-            visualization={"show": False, "axesRadius": 0.1, "axesLength": 0.4, "color": [-1.0, -1.0, -1.0, -1.0]},
+        def offset(mbs_, t, item, par):
+            return [0.0, 0.0, 0.0, 0.0, 0.0, offset_phi(t)]
+
+        def offset_t(mbs_, t, item, par):
+            return [0.0, 0.0, 0.0, 0.0, 0.0, offset_dphi(t)]
+
+        o_joint = mbs.AddObject(
+            ObjectJointGeneric(
+                markerNumbers=[m_tip, m_hinge],
+                constrainedAxes=[1, 1, 0, 0, 0, 1],
+                offsetUserFunction=offset,
+                offsetUserFunction_t=offset_t,
+                visualization={"show": False, "axesRadius": 0.1, "axesLength": 0.4, "color": [-1.0, -1.0, -1.0, -1.0]},
+            )
         )
-    )
+        o_drive = None
+    else:
+        # the hinge: ObjectJointRevolute2D between two position markers (ObjectJointRevolute2D.rst)
+        m_tip = mbs.AddMarker(MarkerBodyPosition(bodyNumber=elements[-1], localPosition=[Le, 0.0, 0.0]))
+        m_hinge = mbs.AddMarker(MarkerBodyPosition(bodyNumber=o_body, localPosition=[-r, 0.0, 0.0]))
+        o_joint = mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m_tip, m_hinge], visualization=hidden))
+        # the drive: the body's rotation relative to the tip section about z
+        # (MarkerBodiesRelativeRotationCoordinate.rst; a NodeGenericData keeps the angle continuous through
+        # ±π, which φ_end = π reaches), held at φ(t) by a coordinate constraint against ground
+        # (ObjectConnectorCoordinate.rst: factor1·value1 − value0 = offsetUserFunction(mbs, t, item, offset))
+        n_angle = mbs.AddNode(NodeGenericData(initialCoordinates=[0.0], numberOfDataCoordinates=1))
+        m_rel = mbs.AddMarker(
+            MarkerBodiesRelativeRotationCoordinate(
+                bodyNumbers=[elements[-1], o_body],
+                nodeNumber=n_angle,
+                localPosition0=[Le, 0.0, 0.0],
+                localPosition1=[-r, 0.0, 0.0],
+                axis0=[0.0, 0.0, 1.0],
+                visualization={"show": False},
+            )
+        )
+        o_drive = mbs.AddObject(
+            ObjectConnectorCoordinate(
+                markerNumbers=[m_ground, m_rel],
+                offsetUserFunction=lambda mbs_, t, item, off: offset_phi(t),
+                offsetUserFunction_t=lambda mbs_, t, item, off: offset_dphi(t),
+                visualization=hidden,
+            )
+        )
 
     # gravity on the body only
     m_c = mbs.AddMarker(MarkerBodyPosition(bodyNumber=o_body, localPosition=[0.0, 0.0, 0.0]))
@@ -215,7 +272,10 @@ def simulate(
     keep = {"writeToFile": False, "storeInternal": True}
     s_pos = mbs.AddSensor(SensorBody(bodyNumber=elements[-1], localPosition=[Le, 0.0, 0.0], outputVariableType=OVT.Position, **keep))
     s_rot = mbs.AddSensor(SensorBody(bodyNumber=elements[-1], localPosition=[Le, 0.0, 0.0], outputVariableType=OVT.Rotation, **keep))
-    s_torque = mbs.AddSensor(SensorObject(objectNumber=o_joint, outputVariableType=OVT.TorqueLocal, **keep))
+    if o_drive is None:
+        s_torque = mbs.AddSensor(SensorObject(objectNumber=o_joint, outputVariableType=OVT.TorqueLocal, **keep))
+    else:
+        s_torque = mbs.AddSensor(SensorObject(objectNumber=o_drive, outputVariableType=OVT.Force, **keep))
 
     mbs.Assemble()
 
@@ -237,12 +297,24 @@ def simulate(
     s.show.statistics = False
     s.linearSolver.solverType = exu.LinearSolverType.EXUdense  # 4n + 7 unknowns: small
 
+    if consistent_start:
+        ti.generalizedAlpha.computeInitialAccelerations = False
+        ti.generalizedAlpha.resetAccelerations = False  # take the initial accelerations set below
+        mbs.systemData.SetODE2Coordinates_tt(
+            _consistent_accelerations(
+                exu, mbs, s, mbs.GetNodeODE2Index(n_body) + 2, mbs.systemData.GetObjectLTGAE(o_drive), _phi_dd0(phi_end, t_rot)
+            ),
+            configuration=exu.ConfigurationType.Initial,
+        )
+
+    t_solve = time.perf_counter()
     try:
         ok = mbs.SolveDynamic(s, showHints=False, showCausingItems=False)
     except exu.SolverError as e:  # printed a banner to stdout too
         raise RuntimeError(f"EXUDYN's SolveDynamic failed (n_elements={n}, dt={dt}, EA={EA}): {e}") from e
     if not ok:
         raise RuntimeError(f"EXUDYN's SolveDynamic failed (n_elements={n}, dt={dt}, EA={EA})")
+    solve_s = time.perf_counter() - t_solve
 
     pos = np.asarray(mbs.GetSensorStoredData(s_pos))
     rot = np.asarray(mbs.GetSensorStoredData(s_rot))
@@ -254,10 +326,12 @@ def simulate(
         "v1": pos[:, 2],
         "theta1": rot[:, 1],
         "u2": pos[:, 1] - l,
-        "M": -trq[:, 3],
+        # generic: the joint's torque on marker 0 (the tip), negated; revolute: the drive's multiplier λ
+        # (its constraint is θ_body − θ_tip − φ = 0, so the drive's torque on the body is −λ = −M)
+        "M": -trq[:, 3] if o_drive is None else trq[:, 1],
     }
     if t_out is None:
-        return PeerRun(t=t, **cols)
+        return PeerRun(t=t, **cols, solve_s=solve_s)
 
     t_out = np.asarray(t_out, dtype=float)
     if t_out.min() < -1e-12 or t_out.max() > t[-1] + 1e-9:
@@ -265,7 +339,53 @@ def simulate(
     k = np.rint(t_out / dt).astype(int)
     on_grid = np.abs(k * dt - t_out) <= 1e-9 * max(1.0, t_end)
     if on_grid.all():
-        return PeerRun(t=t_out, **{c: v[k] for c, v in cols.items()})
+        return PeerRun(t=t_out, **{c: v[k] for c, v in cols.items()}, solve_s=solve_s)
     from scipy.interpolate import CubicSpline
 
-    return PeerRun(t=t_out, **{c: CubicSpline(t, v)(t_out) for c, v in cols.items()})
+    return PeerRun(t=t_out, **{c: CubicSpline(t, v)(t_out) for c, v in cols.items()}, solve_s=solve_s)
+
+
+def _phi_dd0(phi_end: float, t_rot: float) -> float:
+    """φ''(0+) of the sin² law: φ_end·π²/(2 t_rot²)."""
+    return phi_end * math.pi**2 / (2.0 * t_rot**2)
+
+
+def _consistent_accelerations(exu, mbs, settings, i_body_angle: int, drive_rows, phi_dd0: float) -> np.ndarray:
+    """The initial accelerations that satisfy the drive's constraint twice differentiated in time.
+
+    EXUDYN's own initial accelerations (computeInitialAccelerations) solve
+    [M Gᵀ; G 0]·[a0; λ0] = [f; −∂²g/∂t² − …], but the −∂²g/∂t² of a constraint's offset user function is
+    left out (measured: its a0 is exactly zero here, at rest in equilibrium, although φ''(0) ≠ 0). Its a0
+    is taken from its solver's initialisation and corrected by Δa from [M Gᵀ; G 0]·[Δa; Δλ] = [0; γ],
+    γ = φ''(0) on the drive's row (times the row's coefficient of the body's angle, which sets the
+    constraint's sign) and 0 on the others (their ∂²g/∂t² is zero and all velocities are zero at t = 0).
+    M and G are EXUDYN's own (its solver's ComputeMassMatrix and ComputeJacobianAE at t = 0); the drive's
+    row is its one algebraic coordinate (drive_rows, from the system's LTG list)."""
+    solver = exu.MainSolverImplicitSecondOrder()
+    settings.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
+    try:
+        solver.InitializeSolver(mbs, settings)
+        n2, nae = solver.GetODE2size(), solver.GetAEsize()
+        if solver.GetODE1size() != 0:
+            raise RuntimeError("unexpected ODE1 coordinates")
+        a_exu = np.array(mbs.systemData.GetODE2Coordinates_tt(), dtype=float)
+        solver.ComputeMassMatrix(mbs)
+        mass = np.array(solver.GetSystemMassMatrix(), dtype=float)
+        solver.SetSystemJacobian(np.zeros((n2 + nae, n2 + nae)))
+        solver.ComputeJacobianAE(mbs, 1.0, 0.0, 1.0)
+        jac = np.array(solver.GetSystemJacobian(), dtype=float)
+        solver.FinalizeSolver(mbs, settings)
+    finally:
+        settings.timeIntegration.generalizedAlpha.computeInitialAccelerations = False
+    G = jac[n2:, :n2]
+    if len(drive_rows) != 1:
+        raise RuntimeError(f"the drive has {len(drive_rows)} algebraic coordinates, expected 1")
+    row = int(drive_rows[0])
+    sign = G[row, i_body_angle]
+    if abs(abs(sign) - 1.0) > 1e-12:
+        raise RuntimeError(f"the drive's row has {sign} at the body's angle, expected ±1")
+    gamma = np.zeros(nae)
+    gamma[row] = sign * phi_dd0
+    kkt = np.block([[mass, G.T], [G, np.zeros((nae, nae))]])
+    da = np.linalg.solve(kkt, np.concatenate([np.zeros(n2), gamma]))[:n2]
+    return a_exu + da

@@ -1,0 +1,140 @@
+//! The geometrically exact beam (`beam = exact`, src/model/exact.rs) through the driver: its
+//! energy, its small-turn limit (the quadratic model), turns of any size and the one limit
+//! it keeps. The oracle of tests/python/oracle_exact.py checks its equations independently.
+
+use beam_body::model::Outputs;
+use beam_body::sim::{simulate, Scene, SimError};
+use std::f64::consts::PI;
+
+fn scene(sets: &[(&str, &str)]) -> Scene {
+    let mut s = Scene::default();
+    s.set_text("beam", "exact").unwrap();
+    for (k, v) in sets {
+        s.set_text(k, v).unwrap();
+    }
+    s
+}
+
+fn run(scene: &Scene) -> Result<Vec<Outputs>, SimError> {
+    let mut rows = Vec::new();
+    simulate(scene, |o| rows.push(*o))?;
+    Ok(rows)
+}
+
+fn peak(rows: &[Outputs], f: impl Fn(&Outputs) -> f64) -> f64 {
+    rows.iter().map(|o| f(o).abs()).fold(0.0, f64::max)
+}
+
+/// With no damping the total energy after the turn is constant to the integration
+/// tolerance: at rtol 1e-8 over 100 s, with and without the beam's weight. The drift is
+/// relative to the energy of the oscillation after the turn, above the equilibrium (the
+/// straight beam with the body folded back).
+#[test]
+fn energy_after_the_turn_is_constant() {
+    for gravity in ["false", "true"] {
+        let s = scene(&[
+            ("n_elements", "4"),
+            ("beam_gravity", gravity),
+            ("rtol", "1e-8"),
+            ("t_end", "100"),
+            ("dt_out", "0.05"),
+        ]);
+        let rows = run(&s).unwrap();
+        let after: Vec<&Outputs> = rows.iter().filter(|o| o.t >= 0.85).collect();
+        let e0 = after[0].energy;
+        let drift = after.iter().map(|o| (o.energy - e0).abs()).fold(0.0, f64::max);
+        // The straight beam at rest with the body folded back (φ = π): the body's potential
+        // −M2 g (u2 + r cos θ) = M2 g r, the beam's zero.
+        let scale = e0 - 12.0 * 10.0 * 0.5;
+        eprintln!(
+            "beam_gravity {gravity}: energy after the turn {e0:.6} J, its oscillation {scale:.3} \
+             J, max drift over 100 s {drift:.2e} J = {:.2e} of it",
+            drift / scale
+        );
+        assert!(scale > 1.0, "{scale}");
+        assert!(drift < 1e-6 * scale, "drift {drift} J against {scale} J");
+    }
+}
+
+/// With a tiny turn the exact beam is the quadratic one at the same n (same K, same mass at
+/// rest): the two differ by the nonlinearity, relatively the amplitude's square. The motion
+/// is odd in φ_end (mirror symmetry), so halving the turn divides the relative difference
+/// by four.
+#[test]
+fn a_tiny_turn_agrees_with_the_quadratic_beam_to_the_amplitude_squared() {
+    let diff = |phi_end: f64| {
+        let sets = |beam| {
+            let mut s = scene(&[("n_elements", "2"), ("t_end", "3"), ("rtol", "1e-12")]);
+            s.set_text("beam", beam).unwrap();
+            s.set_text("phi_end", &phi_end.to_string()).unwrap();
+            s
+        };
+        let exact = run(&sets("exact")).unwrap();
+        let quad = run(&sets("quadratic")).unwrap();
+        let rel = |f: &dyn Fn(&Outputs) -> f64| {
+            let d = exact.iter().zip(&quad).map(|(a, b)| (f(a) - f(b)).abs()).fold(0.0, f64::max);
+            d / peak(&quad, f)
+        };
+        let amp = peak(&quad, |o| o.theta1);
+        let d = [rel(&|o| o.v1), rel(&|o| o.theta1), rel(&|o| o.root.1), rel(&|o| o.reactions.m)];
+        (d, amp)
+    };
+    let (d1, a1) = diff(0.003);
+    let (d2, _) = diff(0.0015);
+    eprintln!(
+        "exact vs quadratic, phi_end 0.003 (|theta1| up to {a1:.2e}, squared {:.2e}): v1 \
+         {:.2e}, theta1 {:.2e}, M_root {:.2e}, M {:.2e}; at 0.0015: v1 {:.2e}",
+        a1 * a1,
+        d1[0],
+        d1[1],
+        d1[2],
+        d1[3],
+        d2[0]
+    );
+    for (k, d) in d1.iter().enumerate() {
+        assert!(*d < a1 * a1, "quantity {k}: relative difference {d} against {}", a1 * a1);
+    }
+    let ratio = d1[0] / d2[0];
+    assert!((ratio - 4.0).abs() < 0.4, "relative difference ratio {ratio}, want 4");
+}
+
+/// Turns far beyond the quadratic model's range run through: 4π over the paper's t_rot, and
+/// the paper's turn in 0.2 s, which stops the quadratic model at 0.21 s.
+#[test]
+fn turns_of_any_size_run_through() {
+    for (phi_end, t_rot) in [(4.0 * PI, 0.85), (PI, 0.2)] {
+        let s = scene(&[
+            ("n_elements", "2"),
+            ("phi_end", &phi_end.to_string()),
+            ("t_rot", &t_rot.to_string()),
+            ("t_end", "5"),
+        ]);
+        let rows = run(&s).unwrap_or_else(|e| panic!("phi_end {phi_end}, t_rot {t_rot}: {e}"));
+        let (v, th) = (peak(&rows, |o| o.v1), peak(&rows, |o| o.theta1));
+        eprintln!("phi_end {phi_end:.3}, t_rot {t_rot}: max |v1| {v:.3} m, |theta1| {th:.3} rad");
+        assert!(rows.iter().all(|o| o.v1.is_finite() && o.energy.is_finite()));
+        assert!((rows.last().unwrap().phi.phi - phi_end).abs() < 1e-12);
+        let mut quadratic = s.clone();
+        quadratic.set_text("beam", "quadratic").unwrap();
+        if t_rot == 0.2 {
+            let e = run(&quadratic).unwrap_err().to_string();
+            assert!(e.contains("outside"), "{e}");
+            assert!(th > PI / 2.0, "beyond the quadratic model's |theta1| <= pi/2: {th}");
+        }
+    }
+}
+
+/// The model has no contact: a centreline that crosses itself stops the run with a message
+/// that names the limit. The paper's beam turned by 4π in 0.2 s curls near the clamp.
+#[test]
+fn a_centreline_that_crosses_itself_stops_the_run() {
+    let s = scene(&[
+        ("n_elements", "8"),
+        ("phi_end", &(4.0 * PI).to_string()),
+        ("t_rot", "0.2"),
+        ("t_end", "1"),
+    ]);
+    let e = run(&s).unwrap_err().to_string();
+    eprintln!("{e}");
+    assert!(e.contains("cross itself") && e.contains("beam ="), "{e}");
+}
