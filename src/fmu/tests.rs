@@ -91,15 +91,15 @@ fn write_fuzz_regressions() {
     });
 }
 
-#[test]
-fn serialized_state_continues_bit_for_bit() {
-    let (mut a, _, bytes) = state_at_0_51();
+/// A new instance restores `bytes`, a state of `a`; both take the steps `steps` of 8.5 ms and
+/// report the same bits after each. Returns the new instance.
+fn continues_alike(a: &mut Instance, bytes: &[u8], steps: std::ops::Range<usize>) -> Instance {
     let h = 0.0085;
     let (mut b, _) = new_instance();
-    let restored = b.deserialize(&bytes).unwrap();
+    let restored = b.deserialize(bytes).unwrap();
     assert_eq!(b.set_state(&restored), Status::Ok);
     let vrs: Vec<u32> = (Var::V1.vr()..=Var::DdphiApplied.vr()).collect();
-    for k in 60..200 {
+    for k in steps {
         assert_eq!(a.do_step(k as f64 * h, h), Status::Ok);
         assert_eq!(b.do_step(k as f64 * h, h), Status::Ok);
         let (mut ya, mut yb) = (vec![0.0; vrs.len()], vec![0.0; vrs.len()]);
@@ -107,6 +107,36 @@ fn serialized_state_continues_bit_for_bit() {
         b.get_real(&vrs, &mut yb);
         assert_eq!(ya, yb, "step {k}");
     }
+    b
+}
+
+/// The exact beam's state (its integrator's dense second-order parts among it) continues bit
+/// for bit in a new instance, as the paper's model's does.
+#[test]
+fn an_exact_beam_s_state_continues_bit_for_bit() {
+    let setup = |inst: &mut Instance| {
+        assert_eq!(inst.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
+        assert_eq!(inst.set_integer(&[Var::NElements.vr()], &[4]), Status::Ok);
+        assert_eq!(inst.set_integer(&[Var::Beam.vr()], &[2]), Status::Ok);
+        assert_eq!(inst.setup_experiment(Some(1e-6), 0.0, Some(10.2)), Status::Ok);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+    };
+    let (mut a, _) = new_instance();
+    setup(&mut a);
+    let h = 0.0085;
+    for k in 0..60 {
+        assert_eq!(a.do_step(k as f64 * h, h), Status::Ok);
+    }
+    let state = a.get_state().unwrap();
+    let bytes = a.serialize(&state).unwrap();
+    continues_alike(&mut a, &bytes, 60..160);
+}
+
+#[test]
+fn serialized_state_continues_bit_for_bit() {
+    let (mut a, _, bytes) = state_at_0_51();
+    let mut b = continues_alike(&mut a, &bytes, 60..200);
     // Any flipped byte is refused.
     for i in (0..bytes.len()).step_by(7) {
         let mut bad = bytes.clone();
@@ -119,10 +149,11 @@ fn serialized_state_continues_bit_for_bit() {
 /// points' deflections from central differences of the outputs over steps h, relative to the
 /// largest derivative, for orders 1 and 2, over 0.4 s of the paper's scene in `elements`
 /// elements.
-fn finite_difference_errors(h: f64, elements: i32) -> [f64; 2] {
+fn finite_difference_errors(h: f64, elements: i32, beam: i32) -> [f64; 2] {
     let (mut inst, msgs) = new_instance();
     assert_eq!(inst.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
     assert_eq!(inst.set_integer(&[Var::NElements.vr()], &[elements]), Status::Ok);
+    assert_eq!(inst.set_integer(&[Var::Beam.vr()], &[beam]), Status::Ok);
     assert_eq!(inst.setup_experiment(Some(1e-12), 0.0, Some(10.2)), Status::Ok);
     assert_eq!(inst.enter_initialization_mode(), Status::Ok);
     assert_eq!(inst.exit_initialization_mode(), Status::Ok);
@@ -158,15 +189,18 @@ fn finite_difference_errors(h: f64, elements: i32) -> [f64; 2] {
 #[test]
 fn output_derivatives_match_finite_differences_of_the_outputs() {
     // Central differences are off by O(h²): the differences shrink 4-fold per halving.
-    // Four elements vibrate up to 460 rad/s (ω·h = 0.23 at h = 5e-4): shorter steps.
-    for (elements, h) in [(1, 2e-3), (4, 5e-4)] {
-        let (coarse, fine) =
-            (finite_difference_errors(h, elements), finite_difference_errors(h / 2.0, elements));
+    // Four elements vibrate up to 460 rad/s (ω·h = 0.23 at h = 5e-4): shorter steps. The
+    // exact beam (beam = 2) computes its tip's and quarter points' motion its own way.
+    for (elements, h, beam) in [(1, 2e-3, 1), (4, 5e-4, 1), (4, 5e-4, 2)] {
+        let (coarse, fine) = (
+            finite_difference_errors(h, elements, beam),
+            finite_difference_errors(h / 2.0, elements, beam),
+        );
         for order in 0..2 {
             let ratio = coarse[order] / fine[order];
             assert!(
                 fine[order] < 1e-2 && (3.0..5.0).contains(&ratio),
-                "{elements} elements, order {}: {coarse:?} {fine:?}",
+                "{elements} elements, beam {beam}, order {}: {coarse:?} {fine:?}",
                 order + 1
             );
         }

@@ -8,8 +8,8 @@ the EXUDYN repository, version 1.13.6):
   ObjectConnectorCoordinate constraints hold x, y and the slope's y-component of the first node at zero
   (the slope's x-component stays free, so the beam may stretch axially). Axial stiffness EA is a penalty
   that approximates our inextensible beam (ObjectANCFCable2D: "N = EA (ε − ε0)", ε = |r'| − 1); its
-  mass matrix is the consistent one, ∫ρA SᵀS dx, so it also has the axial inertia that our model leaves
-  out (of higher order in the deflection).
+  mass matrix is the consistent one, ∫ρA SᵀS dx, so it also has the axial inertia that our quadratic
+  model leaves out (of higher order in the deflection) and our exact beam (`--beam exact`) keeps.
 - the body: NodeRigidBody2D + ObjectRigidBody2D (mass M2, inertia J_C about its centre of mass C),
   with C initially at (l + r, 0).
 - the driven hinge: ObjectJointGeneric between a MarkerBodyRigid at the beam's tip (local x = element
@@ -20,7 +20,35 @@ the EXUDYN repository, version 1.13.6):
   angles that are added to the joint frame"), so the body's angle is the tip section's angle plus
   φ(t). The offset is used by the index-3 generalized-α integrator; its time derivative is given as
   offsetUserFunction_t as the same page asks ("provide both").
+- or, with hinge="revolute" (the build that the project's issue asks for): the hinge is an
+  ObjectJointRevolute2D (ObjectJointRevolute2D.rst: it "constrains the absolute 2D position of two
+  points") between MarkerBodyPosition markers at the same two points, and the drive is a
+  MarkerBodiesRelativeRotationCoordinate on the last element and the body (MarkerBodiesRelativeRotationCoordinate.rst:
+  the relative rotation of two "rigid bodies or beams" about axis0 = z, φ = atan2(…) of the relative
+  rotation matrix, its velocity from the two angular velocities; here the ANCF tip section's angle
+  atan2(r'_y, r'_x) and the body's angle), held at φ(t) by an ObjectConnectorCoordinate against a ground
+  coordinate with offsetUserFunction φ(t) and offsetUserFunction_t φ'(t) (ObjectConnectorCoordinate.rst).
+  The marker's NodeGenericData (NodeGenericData.rst) carries the previous angle so that the measured
+  angle continues through ±π, which φ_end = π reaches. This is EXUDYN's own pattern
+  (TestModels/relativeRotationTranslationMechanism.py). The two builds are the same constraints: their
+  motions agree to 4e-11 (tests/python/peers/test_exudyn_exact.py).
 - gravity g along +x on the body only (LoadForceVector at C), none on the beam, as in the paper.
+
+Consistent initial accelerations (hinge="revolute", consistent_start, on by default there). EXUDYN's
+theory manual (section "Implicit trapezoidal rule-based, Newmark and Generalized-alpha solver", "Initial
+accelerations") writes the start as [M Gᵀ; G 0]·[a0; λ0] = [f; −∂²g/∂t² − …] (GeneralizedAlphaSettings.
+computeInitialAccelerations, on by default), but the ∂²g/∂t² of a constraint's offset user function is
+not implemented: at rest in equilibrium its a0 is exactly zero although φ''(0) = φ_end·π²/(2 t_rot²)
+= 21.46 rad/s² (measured). There is no setting that adds it, so `_consistent_accelerations` takes EXUDYN's
+a0 and its M and G (MainSolverImplicitSecondOrder: InitializeSolver, ComputeMassMatrix,
+ComputeJacobianAE) and adds Δa from [M Gᵀ; G 0]·[Δa; Δλ] = [0; γ], γ = φ''(0) on the drive's row; the
+result is set as the initial configuration's accelerations (systemData.SetODE2Coordinates_tt) and the
+solver told to use them (computeInitialAccelerations = False, resetAccelerations = False). What it
+changes, measured: the motion by < 1e-12 (the Newton tolerance) and the drive's moment by 8e-4 N·m in
+the first steps. That is the index-3 generalized-α's property: a change of the starting acceleration
+along M⁻¹Gᵀ, which Δa is, is taken up by the multipliers, and the positions, fixed by g(q, t) = 0 at
+each step, do not see it. So the peer's motion is the same with either start; the option is there
+because the issue asks for it and for the moment's first steps.
 
 Initial state: at rest, straight, in static equilibrium. With gravity along the axis the exact static
 state of the discretised beam is a uniform stretch ε0 = M2·g/EA (axial force M2·g, no bending), which
@@ -36,9 +64,11 @@ SensorObject on the joint, TorqueLocal):
 - u2 = x_tip − l, which includes the elastic stretch (M2·g·l/EA = 3e-6 m at φ = 0 with the paper's
   values and EA = 1e8; `static_stretch` gives it);
 - M = the moment that the body exerts on the beam tip, our CLI's sign convention (docs/cli.md: "−M is
-  the torque the drive applies to the body"); it is −(joint's TorqueLocal z) of this joint, whose
-  marker 0 is the tip. As an index-3 Lagrange multiplier it rings for a few steps after the jumps of
-  φ'' (t = 0 and t = t_rot), damped by the integrator's spectral radius.
+  the torque the drive applies to the body"); it is −(joint's TorqueLocal z) of the generic joint, whose
+  marker 0 is the tip, and with hinge="revolute" the drive constraint's multiplier λ (SensorObject
+  Force; the constraint θ_body − θ_tip − φ = 0 puts −λ on the body's angle). As an index-3 Lagrange
+  multiplier it rings for a few steps after the jumps of φ'' (t = 0 and t = t_rot), damped by the
+  integrator's spectral radius.
 
 Integrator: EXUDYN's implicit generalized-α (solverType GeneralizedAlpha, index 3, constant step dt,
 adaptiveStep off so that a failing step fails the run instead of shrinking the step), spectral radius
@@ -47,7 +77,8 @@ spectralRadius must be < 1"). Newton stops on the size of its increment (NewtonS
 1, tolerance `newton_tol` in m and rad): the residual test (mode 0) has a round-off floor set by the
 axial penalty EA/h that relative tolerances below 1e-8 cannot reach from 32 elements on.
 Everything runs headless (no renderer is started), writes no files, prints nothing, uses one thread,
-and is deterministic.
+and is deterministic. PeerRun.solve_s is the wall time of SolveDynamic alone (the integration, with the
+φ(t) user functions called back into Python at each Newton iteration), not of building the model.
 
 What the penalty costs (measured with tests/python/peers/test_exudyn_peer.py's cases):
 - EA too small: the beam stretches (error ∝ 1/EA).
