@@ -54,6 +54,17 @@ def test_quick_report_measures_what_it_says(beam_body, tmp_path):
             assert 0 < integration < 1e-2, (scene.name, n, integration)
             # The total error of the tight run is the model error.
             assert tight[4] == model[n][0][4]
+    # The model hierarchy against the beam (the exact beam in 4 elements): the paper's model is
+    # off it by the quadratic cut, several percent of the peak over 2 s of the paper's scene, and
+    # the quadratic model in more elements no closer; the exact beam in 2 elements is within 0.2 %.
+    ladder = table_rows(text, "The model hierarchy against the beam", "| model")
+    paper, quadratic = ladder["the paper's model"][0], ladder["quadratic"][0]
+    exact_one, exact_two = ladder["exact"]
+    v1 = 3  # v1 over the whole run
+    assert percent(paper[v1]) > 3e-2 and percent(quadratic[v1]) > 3e-2, (paper, quadratic)
+    assert percent(exact_one[v1]) < percent(paper[v1]) / 3, (exact_one, paper)
+    assert percent(exact_two[v1]) < 2e-3, exact_two
+    assert ladder["exact (the beam)"][0][v1] == "0"
 
 
 def test_errors_of_a_run_against_itself_vanish():
