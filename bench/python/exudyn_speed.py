@@ -174,7 +174,7 @@ def main(argv=None) -> int:
     spans = ["10.2", "2T"] if not quick else ["2T"]
     print("\ncode    run                      " + "".join(f"err[0,{s}] m  " for s in spans)
           + "integration s  process/call s  steps")
-    for (code, spec), row in rows.items():
+    for (code, spec), row in sorted(rows.items(), key=lambda kv: (kv[0][0] != "ours", kv[0][1])):
         name = f"n={spec[0]} rtol {spec[1]:.0e}" if code == "ours" else f"n={spec[0]} dt {spec[1]:.2e} EA {spec[2]:.0e}"
         if row["note"] == "failed" or not row["int"]:
             print(f"{code:7s} {name:24s} failed")

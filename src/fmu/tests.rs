@@ -110,27 +110,30 @@ fn continues_alike(a: &mut Instance, bytes: &[u8], steps: std::ops::Range<usize>
     b
 }
 
-/// The exact beam's state (its integrator's dense second-order parts among it) continues bit
-/// for bit in a new instance, as the paper's model's does.
+/// The states of the beam in elements continue bit for bit in a new instance, as the paper's
+/// model's do, whatever their integrator keeps: the exact beam's dense second-order parts,
+/// the quadratic beam's banded ones, and the dense LU of its DAE formulation (whose Jacobian
+/// comes by differences).
 #[test]
-fn an_exact_beam_s_state_continues_bit_for_bit() {
-    let setup = |inst: &mut Instance| {
-        assert_eq!(inst.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
-        assert_eq!(inst.set_integer(&[Var::NElements.vr()], &[4]), Status::Ok);
-        assert_eq!(inst.set_integer(&[Var::Beam.vr()], &[2]), Status::Ok);
-        assert_eq!(inst.setup_experiment(Some(1e-6), 0.0, Some(10.2)), Status::Ok);
-        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
-        assert_eq!(inst.exit_initialization_mode(), Status::Ok);
-    };
-    let (mut a, _) = new_instance();
-    setup(&mut a);
-    let h = 0.0085;
-    for k in 0..60 {
-        assert_eq!(a.do_step(k as f64 * h, h), Status::Ok);
+fn states_of_the_beam_in_elements_continue_bit_for_bit() {
+    // (beam, formulation) as the enumerations' values.
+    for (beam, formulation) in [(2, 1), (1, 1), (1, 2)] {
+        let (mut a, _) = new_instance();
+        assert_eq!(a.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
+        assert_eq!(a.set_integer(&[Var::NElements.vr()], &[4]), Status::Ok);
+        assert_eq!(a.set_integer(&[Var::Beam.vr()], &[beam]), Status::Ok);
+        assert_eq!(a.set_integer(&[Var::Formulation.vr()], &[formulation]), Status::Ok);
+        assert_eq!(a.setup_experiment(Some(1e-6), 0.0, Some(10.2)), Status::Ok);
+        assert_eq!(a.enter_initialization_mode(), Status::Ok);
+        assert_eq!(a.exit_initialization_mode(), Status::Ok);
+        let h = 0.0085;
+        for k in 0..60 {
+            assert_eq!(a.do_step(k as f64 * h, h), Status::Ok);
+        }
+        let state = a.get_state().unwrap();
+        let bytes = a.serialize(&state).unwrap();
+        continues_alike(&mut a, &bytes, 60..160);
     }
-    let state = a.get_state().unwrap();
-    let bytes = a.serialize(&state).unwrap();
-    continues_alike(&mut a, &bytes, 60..160);
 }
 
 #[test]

@@ -9,7 +9,7 @@ use super::phi::PhiPiece;
 use super::systems::Kinematics;
 use super::systems_exact::ExactSystem;
 use super::systems_n::ElementsSystem;
-use crate::solver::{OdeSystem, RangeViolation, SecondOrder};
+use crate::solver::{Layout, OdeSystem, RangeViolation, SecondOrder};
 use nalgebra::{DMatrix, DVector, Dyn};
 
 /// The beam in n elements (or damped, or exact), with the body. A run holds one, boxed.
@@ -131,6 +131,15 @@ impl SystemN<'_> {
         match self {
             SystemN::Quadratic(s) => s.start(v1, theta1, dv1, dtheta1),
             SystemN::Exact(s) => s.start(v1, theta1, dv1, dtheta1),
+        }
+    }
+
+    /// The layout of the parts [`second_order`](OdeSystem::second_order) gives, `None` if it
+    /// gives none (the quadratic beam's DAE formulations: a dense Jacobian by differences).
+    pub fn layout(&self) -> Option<Layout> {
+        match self {
+            SystemN::Quadratic(s) => (!s.formulation.is_dae()).then_some(Layout::Banded),
+            SystemN::Exact(_) => Some(Layout::Dense),
         }
     }
 

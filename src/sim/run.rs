@@ -10,7 +10,7 @@ use crate::model::{
     Outputs, PaperLaw, Phi, PhiPiece, Poly, RangeCheck, Sample, SystemN, TwoDofSystem,
 };
 use crate::scene::{InitialState, PhiSource, Scene};
-use crate::solver::{Bdf, BdfConfig, Layout, OdeSystem, SolverError, Stats, StepOutcome};
+use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
 use crate::visit::StateVisitor;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, Dyn, SVector, U4, U6};
@@ -229,12 +229,8 @@ impl Run {
         let sys = elements.system(self.piece, self.formulation, true);
         let y0 = sys.start(init.v1, init.theta1, init.dv1, init.dtheta1);
         let mut bdf = Bdf::new(*options, t0, y0)?;
-        // The quadratic beam's Jacobian comes in parts of bands and rank one, the exact
-        // beam's in dense ones.
-        bdf.set_second_order(Some(match *elements {
-            BeamN::Quadratic(_) => Layout::Banded,
-            BeamN::Exact(_) => Layout::Dense,
-        }));
+        // The layout the saved state has too: a run restored from it sets the same.
+        bdf.set_second_order(sys.layout());
         self.bdf = Integrator::Elements(bdf);
         self.elements = Some(elements);
         Ok(())
