@@ -2,7 +2,7 @@
 //! energy, its small-turn limit (the quadratic model), turns of any size and the one limit
 //! it keeps. The oracle of tests/python/oracle_exact.py checks its equations independently.
 
-use beam_body::model::Outputs;
+use beam_body::model::{BeamModel, BeamN, Formulation, Outputs, Params};
 use beam_body::sim::{simulate, Scene, SimError};
 use std::f64::consts::PI;
 
@@ -137,4 +137,33 @@ fn a_centreline_that_crosses_itself_stops_the_run() {
     let e = run(&s).unwrap_err().to_string();
     eprintln!("{e}");
     assert!(e.contains("cross itself") && e.contains("beam ="), "{e}");
+}
+
+/// The small oscillations of the exact beam about its own equilibrium: at φ = 0 and π the
+/// equilibrium is straight, where the two beams share their linearisation, so the periods are
+/// the quadratic beam's; bent at π/2 they differ by the nonlinearity, slightly.
+#[test]
+fn modes_are_the_quadratic_beam_s_when_straight_and_its_own_when_bent() {
+    let model = |beam| {
+        let p = Params { n_elements: 4, beam, ..Params::default() };
+        BeamN::new(p, Formulation::Reduced).unwrap()
+    };
+    let (exact, quadratic) = (model(BeamModel::Exact), model(BeamModel::Quadratic));
+    for phi in [0.0, PI / 2.0, PI] {
+        let (qe, we) = exact.modes(phi).unwrap();
+        let (qq, wq) = quadratic.modes(phi).unwrap();
+        let rel = (we[0] - wq[0]).abs() / wq[0];
+        let (ve, vq) = (exact.tip_values(qe.as_slice()).0, quadratic.tip_values(qq.as_slice()).0);
+        eprintln!(
+            "phi {phi:.4}: omega1^2 {:.6} vs {:.6} ({rel:.1e}); v1_eq {ve:.6} vs {vq:.6}",
+            we[0], wq[0]
+        );
+        if phi == PI / 2.0 {
+            assert!(rel > 1e-4 && rel < 1e-2, "{rel}");
+            assert!((ve - vq).abs() > 1e-5 && (ve - vq).abs() < 1e-3 * vq.abs().max(0.1));
+        } else {
+            assert!(rel < 1e-8, "{phi}: {rel}");
+            assert!(ve.abs() < 1e-12 && vq.abs() < 1e-12);
+        }
+    }
 }
