@@ -27,6 +27,14 @@ The issue's claim: "The paper's scene at the accuracy of the report's converged 
    each code that reaches it, and the ratio of their costs (EXUDYN's over ours): integration against
    integration, and process against whole call.
 
+Measured once (exudyn 1.13.6; 2 CPUs with other work beside this run, load average 1.0 to 3.0; the
+three repetitions took 77-78 s each): the references differ by 5.7e-5 m over [0, 2T] and 2.0e-4 m over
+[0, 10.2 s]. Over [0, 10.2 s], 1e-3 m: ours n=4 rtol 1e-6 0.175 s, EXUDYN n=8 dt 1e-3 EA 1e7 1.02 s,
+5.8x; 1e-4 m: ours n=8 rtol 1e-7 1.49 s, EXUDYN n=16 dt 2.5e-4 EA 1e8 6.37 s, 4.3x; 1e-5 m: ours only
+(n=16, 22.9 s). Over [0, 2T]: 3.4x at 1e-3 m, 2.4x at 1e-4 m. Far from 100x: our runs' step counts
+hardly follow rtol (n=8: 190,000 to 260,000 steps over 10.2 s from rtol 1e-4 to 1e-8; n=16 ~950,000),
+so their cost is set by the elements, not by the accuracy asked for.
+
 `--quick`: one repetition, a shorter ladder, the runs to 3.6 s and the errors over [0, 3.6 s] only
 (~1 minute, most of it our 16-element reference). Uses numpy, exudyn (the peer module) and subprocess
 only. Timings are wall times on whatever else the machine runs; the interleaving and the medians
@@ -101,7 +109,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="1 repetition, a short ladder, [0, 3.6 s] only")
     ap.add_argument("--reps", type=int, default=None, help="repetitions per run (default 3, --quick 1)")
-    ap.add_argument("--bin", type=Path, default=Path(os.environ.get("BEAM_BODY_BIN", REPO / "target" / "release" / "beam-body")))
+    default_bin = Path(os.environ.get("BEAM_BODY_BIN", REPO / "target" / "release" / "beam-body"))
+    ap.add_argument("--bin", type=Path, default=default_bin, help="the CLI (default $BEAM_BODY_BIN or target/release)")
     ap.add_argument("--exudyn-ref-n", type=int, default=16, help="EXUDYN reference's elements (default 16)")
     ap.add_argument("--exudyn-ref-dt", type=float, default=6.25e-5, help="EXUDYN reference's step (default 6.25e-5 s)")
     args = ap.parse_args(argv)
@@ -124,12 +133,14 @@ def main(argv=None) -> int:
     t_ref, ours_ref, w, _, note = cli_run(args.bin, 16, 1e-10, t_end)
     if len(t_ref) != len(t_out) or np.max(np.abs(t_ref - t_out)) > 1e-9:
         raise RuntimeError("the CLI's rows are not on the comparison grid")
-    print(f"reference, ours: exact n=16 rtol 1e-10: integration {w:.1f} s, process {time.perf_counter() - t0:.1f} s ({note})", flush=True)
+    print(f"reference, ours: exact n=16 rtol 1e-10: integration {w:.1f} s, "
+          f"process {time.perf_counter() - t0:.1f} s ({note})", flush=True)
     exu_ref, ws, wt, note = exu_run(args.exudyn_ref_n, args.exudyn_ref_dt, 1e8, t_end, t_out)
     print(f"reference, EXUDYN: n={args.exudyn_ref_n} dt {args.exudyn_ref_dt} EA 1e8: SolveDynamic {ws:.1f} s, "
           f"call {wt:.1f} s ({note})", flush=True)
     between = errors(ours_ref, exu_ref, t_out, quick)
-    print("the two references differ by max |Δv1| " + ", ".join(f"{v:.1e} m over [0, {k}]" for k, v in between.items()), flush=True)
+    print("the two references differ by max |Δv1| "
+          + ", ".join(f"{v:.1e} m over [0, {k}]" for k, v in between.items()), flush=True)
 
     # 2. the ladders
     if quick:
@@ -199,8 +210,8 @@ def main(argv=None) -> int:
                 continue
             (o_i, o_spec), (e_i, e_spec) = best[("ours", "int")], best[("exudyn", "int")]
             (o_a, _), (e_a, _) = best[("ours", "all")], best[("exudyn", "all")]
-            print(f"  [0, {span}] {thr:.0e} m: ours n={o_spec[0]} rtol {o_spec[1]:.0e} {o_i:.3f} s, EXUDYN n={e_spec[0]} "
-                  f"dt {e_spec[1]:.2e} EA {e_spec[2]:.0e} {e_i:.3f} s: ratio {e_i / o_i:.1f}x (integration), "
+            print(f"  [0, {span}] {thr:.0e} m: ours n={o_spec[0]} rtol {o_spec[1]:.0e} {o_i:.3f} s, "
+                  f"EXUDYN n={e_spec[0]} dt {e_spec[1]:.2e} EA {e_spec[2]:.0e} {e_i:.3f} s: ratio {e_i / o_i:.1f}x (integration), "
                   f"{e_a / o_a:.1f}x (process/call)")
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"\nload average {load:.2f} at the end ({nproc} CPUs)")

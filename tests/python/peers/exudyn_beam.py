@@ -333,7 +333,12 @@ def simulate(
         ti.generalizedAlpha.resetAccelerations = False  # take the initial accelerations set below
         mbs.systemData.SetODE2Coordinates_tt(
             _consistent_accelerations(
-                exu, mbs, s, mbs.GetNodeODE2Index(n_body) + 2, mbs.systemData.GetObjectLTGAE(o_drive), _phi_dd0(phi_end, t_rot)
+                exu,
+                mbs,
+                s,
+                mbs.GetNodeODE2Index(n_body) + 2,
+                mbs.systemData.GetObjectLTGAE(o_drive),
+                _phi_dd0(phi_end, t_rot),
             ),
             configuration=exu.ConfigurationType.Initial,
         )
