@@ -1,5 +1,8 @@
 """The integrator's cost per step against the number of elements: `python bench/python/cost_per_step.py`.
 
+`--variant beam=exact` adds the exact beam beside the quadratic one, each run interleaved with the
+other's, and the ratio of their costs per step ("× first").
+
 The paper's scene (reduced, rtol 1e-6, no output rows), n = 1, 2, 4, ..., 32, over a span that
 takes the run about half a second; each run 5 times, interleaved across n, and the median of
 wall time / accepted steps (the CLI's own figures). What a step costs grows with the size of
@@ -22,10 +25,11 @@ ROOT = Path(__file__).resolve().parents[2]
 SETTINGS: list = []
 
 
-def run(cli: str, n: int, t_end: float) -> tuple:
+def run(variant: tuple, n: int, t_end: float) -> tuple:
+    cli, extra = variant
     args = [cli, "simulate", str(ROOT / "scenes" / "paper.toml"), "--elements", str(n),
             "--set", f"t_end={t_end!r}", "--set", f"dt_out={t_end!r}", "-o", "/dev/null"]
-    for setting in SETTINGS:
+    for setting in SETTINGS + list(extra):
         args += ["--set", setting]
     err = subprocess.run(args, capture_output=True, text=True, check=True).stderr
     steps = int(re.search(r"steps (\d+)", err).group(1))
@@ -44,9 +48,13 @@ def main(argv=None) -> int:
     p.add_argument("--max-elements", type=int, default=32)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="a setting for every run (repeatable), e.g. stability_guard=false")
+    p.add_argument("--variant", action="append", default=[], metavar="KEY=VALUE[,KEY=VALUE]",
+                   help="besides each build as it is, the first build with these settings too "
+                        "(repeatable), interleaved with the rest, e.g. beam=exact")
     args = p.parse_args(argv)
     SETTINGS[:] = args.set
-    clis = args.cli or [str(ROOT / "target" / "release" / "beam-body")]
+    builds = args.cli or [str(ROOT / "target" / "release" / "beam-body")]
+    clis = [(b, ()) for b in builds] + [(builds[0], tuple(v.split(","))) for v in args.variant]
     ns = [n for n in (1, 2, 4, 8, 16, 32) if n <= args.max_elements]
     # A span per n that costs the first build about 0.5 s, from a short probe.
     spans = {}
@@ -59,9 +67,9 @@ def main(argv=None) -> int:
             for c in clis:
                 samples[c, n].append(run(c, n, spans[n]))
     for c in clis:
-        print(f"\n{c}:\n")
+        print(f"\n{c[0]}" + (f" with {', '.join(c[1])}" if c[1] else "") + ":\n")
         print("| n | states | span [s] | steps | Jacobians | LU | µs per step (median) | "
-              "× previous n |" + (" × first build |" if c != clis[0] else ""))
+              "× previous n |" + (" × first |" if c != clis[0] else ""))
         print("|---|---|---|---|---|---|---|---|" + ("---|" if c != clis[0] else ""))
         prev = None
         for n in ns:
