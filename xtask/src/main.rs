@@ -110,11 +110,13 @@ Commands:
           The model's error against run time (python/beam_body_study/model_error.py):
           the quadratic model in n = 1, 2, 4, 8, 16 elements at rtol 1e-4, 1e-6, 1e-8
           against n = 32 at 1e-8 on four scenes (the paper's, phi_end = 0.3, M2 = 1 kg,
-          t_rot = 3 s); model, integration and total errors of v1, theta1 and the
-          metrics; run times; the fast turn's perturbation growth. Writes
-          docs/model_error.{md,png} (runs cached in target/model_error/runs/; about 6
-          minutes on 2 cores from scratch). --quick: 2 s of two scenes, n = 1, 2 against
-          n = 4, into target/model_error/ (the test suite's smoke test).
+          t_rot = 3 s), and both it and the exact beam in n = 1, 2, 4, 8 against the
+          beam itself (the exact beam, n = 16 at 1e-8); model, integration and total
+          errors of v1, theta1 and the metrics; run times; the fast turn's perturbation
+          growth. Writes docs/model_error.{md,png} (runs cached in
+          target/model_error/runs/; about 25 minutes on 2 cores from scratch). --quick:
+          2 s of two scenes, n = 1, 2 against n = 4, into target/model_error/ (the test
+          suite's smoke test).
   bench-study [--quick]
           Throughput of the study runners side by side (bench/python/bench_study.py):
           a 10^4-case study through the native runner on 1 and 2 threads, the chunked
