@@ -167,3 +167,27 @@ fn modes_are_the_quadratic_beam_s_when_straight_and_its_own_when_bent() {
         }
     }
 }
+
+/// The initial state's tip values are the exact beam's own: its centreline ends at v1_0 with
+/// rate dv1_0 (the cubic shape is scaled to it), and a deflection it cannot reach is refused
+/// naming v1_0.
+#[test]
+fn the_start_puts_the_centreline_s_tip_at_v1_0() {
+    let s = scene(&[
+        ("n_elements", "4"),
+        ("v1_0", "0.8"),
+        ("theta1_0", "0.6"),
+        ("dv1_0", "0.3"),
+        ("dtheta1_0", "-0.2"),
+        ("t_end", "0.01"),
+    ]);
+    let first = run(&s).unwrap()[0];
+    for (got, want) in
+        [(first.v1, 0.8), (first.theta1, 0.6), (first.dv1, 0.3), (first.dtheta1, -0.2)]
+    {
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+    }
+    let far = scene(&[("v1_0", "3.0"), ("n_elements", "2")]);
+    let e = run(&far).unwrap_err().to_string();
+    assert!(e.contains("v1_0") && e.contains("3.0"), "{e}");
+}

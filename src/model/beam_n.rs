@@ -127,9 +127,15 @@ pub enum SystemN<'a> {
 
 impl SystemN<'_> {
     /// The state with the tip's values ([`ElementsSystem::start`], [`ExactSystem::start`]).
-    pub fn start(&self, v1: f64, theta1: f64, dv1: f64, dtheta1: f64) -> DVector<f64> {
+    pub fn start(
+        &self,
+        v1: f64,
+        theta1: f64,
+        dv1: f64,
+        dtheta1: f64,
+    ) -> Result<DVector<f64>, String> {
         match self {
-            SystemN::Quadratic(s) => s.start(v1, theta1, dv1, dtheta1),
+            SystemN::Quadratic(s) => Ok(s.start(v1, theta1, dv1, dtheta1)),
             SystemN::Exact(s) => s.start(v1, theta1, dv1, dtheta1),
         }
     }

@@ -37,13 +37,45 @@ impl ExactSystem<'_> {
         2 * self.model.dofs()
     }
 
-    /// The state of the tip's values, as [`ElementsSystem::start`](super::ElementsSystem::start):
-    /// the nodal (w, α) of the one cubic w with that end value and slope. ϑ1 is then exact,
-    /// and v1 = ∫ sin α ds is the given deflection to first order.
-    pub fn start(&self, v1: f64, theta1: f64, dv1: f64, dtheta1: f64) -> DVector<f64> {
+    /// The state of the tip's values: the nodal (w, α) of one cubic w, as
+    /// [`ElementsSystem::start`](super::ElementsSystem::start) takes, with its end slope ϑ1
+    /// and its end value chosen so that the centreline's tip is at v1 = r_y(l) (by secant
+    /// iterations); the rates alike, v̇1 = ṙ_y(l) being linear in them. An error names v1_0
+    /// when no such cubic is found (a deflection the beam cannot reach).
+    pub fn start(
+        &self,
+        v1: f64,
+        theta1: f64,
+        dv1: f64,
+        dtheta1: f64,
+    ) -> Result<DVector<f64>, String> {
         let beam = &self.model.quadratic.beam;
-        let q = beam.tip_cubic(v1, theta1);
-        DVector::from_iterator(self.states(), q.into_iter().chain(beam.tip_cubic(dv1, dtheta1)))
+        let model = self.model;
+        let tip_y = |a: f64| model.tip_values(&beam.tip_cubic(a, theta1)).0 - v1;
+        let (mut a, mut b) = (v1, v1 + 1e-3 * (v1.abs() + 1e-3));
+        let (mut fa, mut fb) = (tip_y(a), tip_y(b));
+        for _ in 0..60 {
+            if fb.abs() <= 1e-14 * (1.0 + v1.abs()) || fb == fa {
+                break;
+            }
+            let c = b - fb * (b - a) / (fb - fa);
+            (a, fa) = (b, fb);
+            b = c;
+            fb = tip_y(b);
+        }
+        if fb.is_nan() || fb.abs() > 1e-12 * (1.0 + v1.abs()) {
+            return Err(format!(
+                "the initial state `v1_0` = {v1:?} with `theta1_0` = {theta1:?}: no cubic shape of \
+                 the exact beam ends at that deflection (it must be well inside |v1_0| < l = {:?})",
+                beam.l
+            ));
+        }
+        let q = beam.tip_cubic(b, theta1);
+        let zero = vec![0.0; q.len()];
+        let rate = |a: f64| model.tip(&q, &beam.tip_cubic(a, dtheta1), &zero).v[1];
+        let (r0, r1) = (rate(0.0), rate(1.0));
+        let qd = beam.tip_cubic((dv1 - r0) / (r1 - r0), dtheta1);
+        Ok(DVector::from_iterator(self.states(), q.into_iter().chain(qd)))
     }
 
     /// The motion at (t, y): the tip's, the quarter points', the beam's energy and the loads

@@ -225,10 +225,11 @@ impl Run {
         options: &BdfConfig,
         t0: f64,
         init: InitialState,
-    ) -> Result<(), SolverError> {
+    ) -> Result<(), SimError> {
         let sys = elements.system(self.piece, self.formulation, true);
-        let y0 = sys.start(init.v1, init.theta1, init.dv1, init.dtheta1);
-        let mut bdf = Bdf::new(*options, t0, y0)?;
+        let y0 =
+            sys.start(init.v1, init.theta1, init.dv1, init.dtheta1).map_err(SimError::Setting)?;
+        let mut bdf = Bdf::new(*options, t0, y0).map_err(SimError::Solver)?;
         // The layout the saved state has too: a run restored from it sets the same.
         bdf.set_second_order(sys.layout());
         self.bdf = Integrator::Elements(bdf);
