@@ -142,7 +142,8 @@ def test_valid_toml_is_accepted(beam_body, tmp_path):
     ("t_end = 0.1\nformulation = dae\n", [":2:15: not valid TOML"]),
     ("t_end = 0.1\nt_end = 0.2\n", [":2:", "not valid TOML"]),
     ("t_end = \"5\"\n", [":1: `t_end` = \"5\": must be a number, positive and finite [s], not a string"]),
-    ("\nbeam = \"exact\"\n", [":2: unknown setting `beam`", "must be one of l, EI"]),
+    ("\nbeam_theory = \"exact\"\n", [":2: unknown setting `beam_theory`", "must be one of l, EI"]),
+    ("\nbeam = \"elastica\"\n", [":2: `beam` = \"elastica\": must be one of quadratic, exact"]),
     ("formulation = \"dae-stabilized\"\n", [":1:", "one of reduced, dae, dae_stabilized, linear"]),
     ("[model]\nEI = 1.0\n", [":1: `[model]`: a scene has no tables"]),
 ])
@@ -153,8 +154,8 @@ def test_invalid_toml_and_wrong_types_are_refused_naming_file_line_and_key(beam_
 
 
 def test_an_unknown_setting_on_the_command_line_is_named(beam_body):
-    """`--set beam=exact` said "not a number" instead of "unknown name"."""
-    refused(beam_body, "simulate", PAPER, "--set", "beam=exact", needles=("unknown setting `beam`",))
+    """`--set beam_theory=exact` said "not a number" instead of "unknown name"."""
+    refused(beam_body, "simulate", PAPER, "--set", "beam_theory=exact", needles=("unknown setting `beam_theory`",))
     refused(beam_body, "simulate", PAPER, "--set", "t_end=soon", needles=("`t_end` = soon: must be a number",))
 
 
