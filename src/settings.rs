@@ -106,11 +106,11 @@ pub const BEAM_TYPE: EnumType = EnumType {
     items: &[
         (
             "quadratic",
-            "the paper's: deflection v(x), the geometric nonlinearity kept to second order              (u = -1/2 int v'^2), no axial inertia; valid for |v1| <= l, |theta1| <= pi/2",
+            "the paper's: deflection v(x), the geometric nonlinearity kept to second order (u = -1/2 int v'^2), no axial inertia; valid for |v1| <= l, |theta1| <= pi/2",
         ),
         (
             "exact",
-            "the inextensible elastica in the section angle alpha(s), with the beam's axial              inertia: valid at any rotation (formulation reduced)",
+            "the inextensible elastica in the section angle alpha(s), with the beam's axial inertia: valid at any rotation (formulation reduced)",
         ),
     ],
 };

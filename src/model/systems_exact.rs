@@ -74,6 +74,13 @@ impl ExactSystem<'_> {
         let zero = vec![0.0; q.len()];
         let rate = |a: f64| model.tip(&q, &beam.tip_cubic(a, dtheta1), &zero).v[1];
         let (r0, r1) = (rate(0.0), rate(1.0));
+        // At the fold of the reachable deflections the tip's rate no longer follows the shape's.
+        if (r1 - r0).abs() < 1e-6 || !(r1 - r0).is_finite() {
+            return Err(format!(
+                "the initial state `v1_0` = {v1:?}: at the furthest deflection the exact beam \
+                 reaches, `dv1_0` = {dv1:?} has no shape rate; start nearer the straight beam"
+            ));
+        }
         let qd = beam.tip_cubic((dv1 - r0) / (r1 - r0), dtheta1);
         Ok(DVector::from_iterator(self.states(), q.into_iter().chain(qd)))
     }
