@@ -475,17 +475,19 @@ impl ExactBeam {
         (self.tip(q, &zero, &zero).r[1], q[q.len() - 1])
     }
 
-    /// Every Gauss point's arc length, weight and motion, element by element, and the tip's
-    /// motion: the running sums of the module's notes (off the integrator's path).
+    /// Every Gauss point's arc length, weight and motion, element by element, and every
+    /// node's motion (node k at s = k·l/n, k = 1..n, the tip last): the running sums of the
+    /// module's notes (off the integrator's path).
     pub fn gauss_points(
         &self,
         q: &[f64],
         qd: &[f64],
         qdd: &[f64],
-    ) -> (Vec<(f64, f64, PointMotion)>, PointMotion) {
+    ) -> (Vec<(f64, f64, PointMotion)>, Vec<PointMotion>) {
         let (n, h) = (self.n(), self.h());
         let Rule { a, b, c } = &self.rule;
         let mut out = Vec::with_capacity(n * P);
+        let mut nodes = Vec::with_capacity(n);
         let mut base = PointMotion::default();
         for e in 0..n {
             let (al, w, dd) = (self.alpha(q, e), self.alpha(qd, e), self.alpha(qdd, e));
@@ -515,8 +517,9 @@ impl ExactBeam {
                 v: run(b, &base.v, &f[1]),
                 a: run(b, &base.a, &f[2]),
             };
+            nodes.push(base);
         }
-        (out, base)
+        (out, nodes)
     }
 
     /// The beam's kinetic and potential energies [J]: ½m Σ w_i|ṙ_i|², and ½qᵀKq with the
@@ -540,7 +543,8 @@ impl ExactBeam {
     /// model. Of the damping, βK is internal and adds nothing; αM_b adds its resultant.
     pub fn root_loads(&self, phi: &Phi, q: &[f64], qd: &[f64], qdd: &[f64]) -> (f64, f64) {
         let Params { m, m2, j_c, r, g, .. } = *self.params();
-        let (points, tip) = self.gauss_points(q, qd, qdd);
+        let (points, nodes) = self.gauss_points(q, qd, qdd);
+        let tip = nodes[nodes.len() - 1];
         let nq = q.len();
         let (st, ct) = math::sin_cos(q[nq - 1] + phi.phi);
         let (dth, ddth) = (qd[nq - 1] + phi.dphi, qdd[nq - 1] + phi.ddphi);
@@ -578,16 +582,12 @@ impl ExactBeam {
     /// The centreline at the clamp, the Gauss points and the nodes: (s, r), from the clamp.
     pub fn centreline(&self, q: &[f64]) -> Vec<(f64, [f64; 2])> {
         let zero = vec![0.0; q.len()];
-        let (points, _) = self.gauss_points(q, &zero, &zero);
+        let (points, nodes) = self.gauss_points(q, &zero, &zero);
         let h = self.h();
         let mut line = vec![(0.0, [0.0; 2])];
-        for (k, (s, _, p)) in points.iter().enumerate() {
-            line.push((*s, p.r));
-            if k % P == P - 1 {
-                let e = k / P;
-                let end = self.point(q, &zero, &zero, (e + 1) as f64 * h);
-                line.push(((e + 1) as f64 * h, end.r));
-            }
+        for (e, (element, node)) in points.chunks(P).zip(&nodes).enumerate() {
+            line.extend(element.iter().map(|(s, _, p)| (*s, p.r)));
+            line.push(((e + 1) as f64 * h, node.r));
         }
         line
     }
