@@ -4,7 +4,7 @@
 
 use super::description::{BaseType, Causality};
 use super::instance::{trace, Instance};
-use super::machine::{mask, FmiError, FmiResult, State, Status};
+use super::machine::{mask, FmiError, FmiResult, Interface, State, Status};
 use super::model::{CoSimulation, Notes};
 use crate::math::same_time;
 
@@ -15,6 +15,13 @@ pub const STATUS_LAST_SUCCESSFUL_TIME: i32 = 2;
 pub const STATUS_TERMINATED: i32 = 3;
 
 impl<M: CoSimulation> Instance<M> {
+    /// Whether `f`, a co-simulation function, may be called in the current state (`mask`)
+    /// on this instance.
+    fn cs_allowed(&self, f: super::instance::Func, mask: u32) -> FmiResult<()> {
+        self.require(f, Interface::CoSimulation)?;
+        self.allowed(f, mask)
+    }
+
     /// SetRealInputDerivatives: derivatives of the inputs at the next communication point,
     /// for the next step only.
     pub fn set_real_input_derivatives(
@@ -34,7 +41,7 @@ impl<M: CoSimulation> Instance<M> {
         values: &[f64],
     ) -> FmiResult {
         let f = self.func("SetRealInputDerivatives");
-        self.allowed(f, mask::SET)?;
+        self.cs_allowed(f, self.masks().set)?;
         if vrs.len() != orders.len() || vrs.len() != values.len() {
             return Err(FmiError::error(format!("{f}: arrays of different lengths")));
         }
@@ -85,7 +92,7 @@ impl<M: CoSimulation> Instance<M> {
     ) -> Status {
         let f = self.func("GetRealOutputDerivatives");
         let r = (|| {
-            self.allowed(f, mask::OUTPUT_DERIVATIVES)?;
+            self.cs_allowed(f, mask::OUTPUT_DERIVATIVES)?;
             let max = M::MAX_OUTPUT_DERIVATIVE_ORDER;
             for ((vr, order), slot) in vrs.iter().zip(orders).zip(out.iter_mut()) {
                 let info = Self::lookup(f, *vr, BaseType::Real)?;
@@ -139,7 +146,7 @@ impl<M: CoSimulation> Instance<M> {
 
     fn try_do_step(&mut self, tc: f64, h: f64) -> FmiResult {
         let f = self.func("DoStep");
-        self.allowed(f, mask::STEP_COMPLETE)?;
+        self.cs_allowed(f, mask::STEP_COMPLETE)?;
         let time = self.core.time;
         if !(h.is_finite() && h > 0.0) {
             return Err(FmiError::error(format!(
@@ -190,7 +197,7 @@ impl<M: CoSimulation> Instance<M> {
     /// CancelStep: steps are synchronous, so there is never one to cancel.
     pub fn cancel_step(&mut self) -> Status {
         let f = self.func("CancelStep");
-        let r = self.allowed(f, mask::NONE).map(|()| Status::Error);
+        let r = self.cs_allowed(f, mask::NONE).map(|()| Status::Error);
         self.status(r)
     }
 
@@ -198,7 +205,7 @@ impl<M: CoSimulation> Instance<M> {
     /// provided (they concern asynchronous steps).
     pub fn get_unprovided_status(&mut self, name: &'static str, kind: i32) -> Status {
         let f = self.func(name);
-        let r = self.allowed(f, mask::STATUS).and_then(|()| {
+        let r = self.cs_allowed(f, mask::STATUS).and_then(|()| {
             Err(FmiError::error(format!(
                 "{f}: status kind {kind} is not provided: fmi2DoStep never returns fmi2Pending"
             )))
@@ -209,7 +216,7 @@ impl<M: CoSimulation> Instance<M> {
     /// GetRealStatus (FMI 2.0): fmi2LastSuccessfulTime.
     pub fn get_real_status(&mut self, kind: i32) -> Result<f64, Status> {
         let f = self.func("GetRealStatus");
-        let r = self.allowed(f, mask::STATUS).and_then(|()| {
+        let r = self.cs_allowed(f, mask::STATUS).and_then(|()| {
             if kind != STATUS_LAST_SUCCESSFUL_TIME {
                 return Err(FmiError::error(format!(
                     "{f}: status kind {kind} is not provided: only fmi2LastSuccessfulTime \
@@ -226,7 +233,7 @@ impl<M: CoSimulation> Instance<M> {
     /// GetBooleanStatus (FMI 2.0): fmi2Terminated.
     pub fn get_boolean_status(&mut self, kind: i32) -> Result<bool, Status> {
         let f = self.func("GetBooleanStatus");
-        let r = self.allowed(f, mask::STATUS).and_then(|()| {
+        let r = self.cs_allowed(f, mask::STATUS).and_then(|()| {
             if kind != STATUS_TERMINATED {
                 return Err(FmiError::error(format!(
                     "{f}: status kind {kind} is not provided: only fmi2Terminated \
@@ -240,12 +247,14 @@ impl<M: CoSimulation> Instance<M> {
         self.edge(r)
     }
 
-    /// GetDirectionalDerivative: not provided (providesDirectionalDerivative = false).
+    /// GetDirectionalDerivative of a co-simulation instance: not provided (its
+    /// providesDirectionalDerivative = false; Model Exchange's is true).
     pub fn get_directional_derivative(&mut self) -> Status {
         let f = self.func("GetDirectionalDerivative");
-        let r = self.allowed(f, mask::GET).and_then(|()| {
+        let r = self.cs_allowed(f, self.masks().get).and_then(|()| {
             Err(FmiError::error(format!(
-                "{f}: not provided (providesDirectionalDerivative = false)"
+                "{f}: not provided in co-simulation (providesDirectionalDerivative = false); \
+                 Model Exchange provides it"
             )))
         });
         self.status(r)

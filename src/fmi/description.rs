@@ -30,6 +30,16 @@ pub struct Capabilities {
     pub provides_directional_derivative: bool,
 }
 
+/// The `<ModelExchange>` capability flags (the memory and instantiation flags are the
+/// co-simulation's). Each one that is true is implemented and tested.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExchangeCapabilities {
+    /// Whether the host may skip fmi2CompletedIntegratorStep: false, since the step's end
+    /// is where the range of validity is checked.
+    pub completed_integrator_step_not_needed: bool,
+    pub provides_directional_derivative: bool,
+}
+
 /// A `<Unit>`: name and SI base-unit exponents (kg, m, s, rad; the others are zero).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Unit {
@@ -51,6 +61,8 @@ pub enum Causality {
     Parameter,
     Input,
     Output,
+    /// Computed and readable, never set: the derivatives of the continuous states.
+    Local,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,6 +122,9 @@ pub struct VarInfo {
     pub variability: Variability,
     pub ty: Type,
     pub description: &'static str,
+    /// For the derivative of a continuous state (Model Exchange): the state's value
+    /// reference.
+    pub derivative_of: Option<u32>,
 }
 
 /// `<LogCategories>`: (name, description). Warnings and errors are always logged; the

@@ -8,7 +8,7 @@
 #![forbid(unsafe_code)]
 
 use super::description::{BaseType, Causality, VarInfo, LOG_CATEGORIES};
-use super::machine::{mask, FmiError, FmiResult, State, Status};
+use super::machine::{mask, FmiError, FmiResult, Interface, Masks, State, Status};
 use super::model::{Model, Notes, Setup, Value};
 use super::snapshot::{self, Snapshot};
 use std::fmt;
@@ -84,10 +84,11 @@ fn listing<'a, M, T>(vrs: &'a [u32], values: &'a [T]) -> Listing<'a, M, T> {
 }
 
 impl<M: Model> Instance<M> {
-    /// A new instance called `name` of the interface whose functions start with `api`
+    /// A new instance called `name` of `interface`, whose functions start with `api`
     /// (`fmi2`), after checking the name and the GUID. `None`, after logging why, otherwise.
     pub fn instantiate(
         api: &'static str,
+        interface: Interface,
         name: &str,
         guid: &str,
         mut log: Logger,
@@ -113,7 +114,7 @@ impl<M: Model> Instance<M> {
             api,
             log,
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
-            core: Snapshot::new(),
+            core: Snapshot::new(interface),
         };
         inst.trace(format_args!("{func}: instance `{name}`"));
         Some(inst)
@@ -125,6 +126,29 @@ impl<M: Model> Instance<M> {
 
     pub fn state(&self) -> State {
         self.core.state
+    }
+
+    pub fn interface(&self) -> Interface {
+        self.core.interface
+    }
+
+    /// The sets of states of this instance's interface.
+    #[inline]
+    pub(crate) fn masks(&self) -> &'static Masks {
+        self.core.interface.masks()
+    }
+
+    /// Refuses a function of `interface` on an instance of another: logs why.
+    pub(crate) fn require(&self, func: impl fmt::Display, interface: Interface) -> FmiResult<()> {
+        let mine = self.core.interface;
+        if mine == interface {
+            return Ok(());
+        }
+        Err(FmiError::error(format!(
+            "{func}: a {} function, but this instance was instantiated for {}",
+            interface.name(),
+            mine.name()
+        )))
     }
 
     /// The name of function `name` of this instance's interface, for messages.
@@ -332,7 +356,7 @@ impl<M: Model> Instance<M> {
         let f = self.func("ExitInitializationMode");
         self.allowed(f, mask::INITIALIZATION)?;
         let setup = self.core.setup;
-        if let Err(msg) = self.core.model.start(&setup) {
+        if let Err(msg) = self.core.model.start(&setup, self.core.interface) {
             self.core.state = State::Error;
             return Err(FmiError::error(format!("{f}: {msg}")));
         }
@@ -340,15 +364,16 @@ impl<M: Model> Instance<M> {
         self.core.time = t0;
         self.core.last_successful_time = t0;
         self.core.terminated = false;
-        self.core.state = State::StepComplete;
-        trace!(self, "{f}: integrator started at t = {t0:?}");
+        let state = self.masks().initialized;
+        self.core.state = state;
+        trace!(self, "{f}: started at t = {t0:?}, state `{}`", state.name());
         Ok(Status::Ok)
     }
 
     /// Terminate.
     pub fn terminate(&mut self) -> Status {
         let f = self.func("Terminate");
-        let r = self.allowed(f, mask::TERMINATE).map(|()| {
+        let r = self.allowed(f, self.masks().terminate).map(|()| {
             self.core.state = State::Terminated;
             let t = self.core.time;
             trace!(self, "{f}: at t = {t:?}");
@@ -361,7 +386,7 @@ impl<M: Model> Instance<M> {
     pub fn reset(&mut self) -> Status {
         let f = self.func("Reset");
         let r = self.allowed(f, mask::ANY_BUT_FATAL).map(|()| {
-            self.core = Snapshot::new();
+            self.core = Snapshot::new(self.core.interface);
             trace!(self, "{f}: back to `instantiated` with the start values");
             Status::Ok
         });
@@ -415,7 +440,7 @@ impl<M: Model> Instance<M> {
     ) -> Status {
         let f = self.func(name);
         let r = (|| {
-            self.allowed(f, mask::GET)?;
+            self.allowed(f, self.masks().get)?;
             if vrs.len() != out.len() {
                 return Err(FmiError::error(format!(
                     "{f}: {} value references but {} values",
@@ -436,7 +461,7 @@ impl<M: Model> Instance<M> {
     /// is refused.
     pub fn no_strings(&mut self, name: &'static str, set: bool, vrs: &[u32]) -> Status {
         let f = self.func(name);
-        let allowed = if set { mask::SET } else { mask::GET };
+        let allowed = if set { self.masks().set } else { self.masks().get };
         let r = self.allowed(f, allowed).and_then(|()| match vrs.first() {
             None => {
                 trace!(self, "{f}: no variables");
@@ -476,7 +501,7 @@ impl<M: Model> Instance<M> {
         value: T,
         convert: impl Fn(T) -> Value,
     ) -> FmiResult {
-        self.allowed(f, mask::SET)?;
+        self.allowed(f, self.masks().set)?;
         let state = self.core.state;
         let info = Self::lookup(f, vr, base)?;
         self.settable(f, info, state)?;
@@ -496,7 +521,7 @@ impl<M: Model> Instance<M> {
         values: &[T],
         convert: impl Fn(T) -> Value,
     ) -> FmiResult {
-        self.allowed(f, mask::SET)?;
+        self.allowed(f, self.masks().set)?;
         if vrs.len() != values.len() {
             return Err(FmiError::error(format!(
                 "{f}: {} value references but {} values",
@@ -525,10 +550,10 @@ impl<M: Model> Instance<M> {
     /// before initialization ends.
     #[inline]
     fn settable(&self, f: Func, info: &VarInfo, state: State) -> FmiResult<()> {
-        match (info.causality, state) {
-            (Causality::Output, _) | (Causality::Parameter, State::StepComplete) => {
-                Err(self.refusal(f, info, state))
-            }
+        let running = self.masks().running & state.bit() != 0;
+        match info.causality {
+            Causality::Output | Causality::Local => Err(self.refusal(f, info, state)),
+            Causality::Parameter if running => Err(self.refusal(f, info, state)),
             _ => Ok(()),
         }
     }
@@ -539,6 +564,7 @@ impl<M: Model> Instance<M> {
     fn refusal(&self, f: Func, info: &VarInfo, state: State) -> FmiError {
         let why = match info.causality {
             Causality::Output => "it is an output".to_string(),
+            Causality::Local => "it is a calculated local variable".to_string(),
             _ => format!(
                 "it is a fixed parameter, settable only before {} (state is `{}`)",
                 self.func("ExitInitializationMode"),
@@ -593,7 +619,7 @@ impl<M: Model> Instance<M> {
     /// GetFMUstate: a copy of everything but the name and logger.
     pub fn get_state(&mut self) -> Result<Box<Snapshot<M>>, Status> {
         let f = self.func("GetFMUstate");
-        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+        let r = self.allowed(f, self.masks().fmu_state).map(|()| {
             self.trace_state(format_args!("{f}: new snapshot"));
             Box::new(self.core.clone())
         });
@@ -603,7 +629,7 @@ impl<M: Model> Instance<M> {
     /// GetFMUstate into an existing snapshot, reusing its memory.
     pub fn get_state_into(&mut self, snapshot: &mut Snapshot<M>) -> Status {
         let f = self.func("GetFMUstate");
-        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+        let r = self.allowed(f, self.masks().fmu_state).map(|()| {
             snapshot.clone_from(&self.core);
             self.trace_state(format_args!("{f}: into the existing snapshot"));
             Status::Ok
@@ -614,10 +640,17 @@ impl<M: Model> Instance<M> {
     /// SetFMUstate.
     pub fn set_state(&mut self, snapshot: &Snapshot<M>) -> Status {
         let f = self.func("SetFMUstate");
-        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+        let r = self.allowed(f, self.masks().fmu_state).and_then(|()| {
+            if snapshot.interface != self.core.interface {
+                return Err(FmiError::error(format!(
+                    "{f}: the FMU state was saved by a {} instance; this one is {}",
+                    snapshot.interface.name(),
+                    self.core.interface.name()
+                )));
+            }
             self.core.clone_from(snapshot);
             self.trace_state(format_args!("{f}: restored"));
-            Status::Ok
+            Ok(Status::Ok)
         });
         self.status(r)
     }
@@ -637,7 +670,7 @@ impl<M: Model> Instance<M> {
     /// SerializeFMUstate: the byte form of a snapshot ([`snapshot`] documents the format).
     pub fn serialize(&mut self, snapshot: &Snapshot<M>) -> Result<Vec<u8>, Status> {
         let f = self.func("SerializeFMUstate");
-        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+        let r = self.allowed(f, self.masks().fmu_state).map(|()| {
             let bytes = snapshot::serialize(snapshot);
             trace!(self, "{f}: {} bytes", bytes.len());
             bytes
@@ -648,7 +681,7 @@ impl<M: Model> Instance<M> {
     /// SerializedFMUstateSize.
     pub fn serialized_size(&mut self, snapshot: &Snapshot<M>) -> Result<usize, Status> {
         let f = self.func("SerializedFMUstateSize");
-        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).map(|()| {
+        let r = self.allowed(f, self.masks().fmu_state).map(|()| {
             let n = snapshot::serialize(snapshot).len();
             trace!(self, "{f}: {n} bytes");
             n
@@ -660,7 +693,7 @@ impl<M: Model> Instance<M> {
     /// malformed bytes give an error that says what is wrong.
     pub fn deserialize(&mut self, bytes: &[u8]) -> Result<Box<Snapshot<M>>, Status> {
         let f = self.func("DeSerializeFMUstate");
-        let r = self.allowed(f, mask::GET | mask::INSTANTIATED).and_then(|()| {
+        let r = self.allowed(f, self.masks().fmu_state).and_then(|()| {
             let core = snapshot::deserialize::<M>(bytes)
                 .map(Box::new)
                 .map_err(|e| FmiError::error(format!("{f}: {e}")))?;

@@ -2,8 +2,10 @@
 //! function may be called, the statuses, and the error that carries a status to the edge.
 #![forbid(unsafe_code)]
 
-/// The states an instance can be in (FMI 2.0 co-simulation, spec §4.2.4). `stepInProgress`
-/// and `stepCanceled` never occur: steps are synchronous.
+/// The states an instance can be in: co-simulation's (FMI 2.0, spec §4.2.4) and Model
+/// Exchange's (§3.2.3), which share the first two and the last three. `stepInProgress` and
+/// `stepCanceled` never occur: steps are synchronous. The order is that of a serialized
+/// state's `state` field: new states go last.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum State {
     Instantiated,
@@ -13,10 +15,12 @@ pub enum State {
     Terminated,
     Error,
     Fatal,
+    EventMode,
+    ContinuousTimeMode,
 }
 
 impl State {
-    const ALL: [State; 7] = [
+    const ALL: [State; 9] = [
         State::Instantiated,
         State::InitializationMode,
         State::StepComplete,
@@ -24,6 +28,8 @@ impl State {
         State::Terminated,
         State::Error,
         State::Fatal,
+        State::EventMode,
+        State::ContinuousTimeMode,
     ];
 
     pub(crate) fn bit(self) -> u32 {
@@ -39,6 +45,8 @@ impl State {
             State::Terminated => "terminated",
             State::Error => "error",
             State::Fatal => "fatal",
+            State::EventMode => "event mode",
+            State::ContinuousTimeMode => "continuous-time mode",
         }
     }
 
@@ -54,7 +62,7 @@ impl State {
 /// Sets of states in which a function may be called.
 pub(crate) mod mask {
     use super::State::{self, *};
-    const fn bits(states: &[State]) -> u32 {
+    pub(crate) const fn bits(states: &[State]) -> u32 {
         let mut m = 0;
         let mut k = 0;
         while k < states.len() {
@@ -63,18 +71,122 @@ pub(crate) mod mask {
         }
         m
     }
-    pub const ANY_BUT_FATAL: u32 =
-        bits(&[Instantiated, InitializationMode, StepComplete, StepFailed, Terminated, Error]);
+    pub const ANY_BUT_FATAL: u32 = bits(&[
+        Instantiated,
+        InitializationMode,
+        StepComplete,
+        StepFailed,
+        Terminated,
+        Error,
+        EventMode,
+        ContinuousTimeMode,
+    ]);
     pub const INSTANTIATED: u32 = bits(&[Instantiated]);
     pub const INITIALIZATION: u32 = bits(&[InitializationMode]);
+    // Co-simulation's own functions.
     pub const STEP_COMPLETE: u32 = bits(&[StepComplete]);
-    pub const TERMINATE: u32 = bits(&[StepComplete, StepFailed]);
-    pub const GET: u32 = bits(&[InitializationMode, StepComplete, StepFailed, Terminated, Error]);
-    pub const SET: u32 = bits(&[Instantiated, InitializationMode, StepComplete]);
     pub const STATUS: u32 = bits(&[StepComplete, StepFailed, Terminated]);
     pub const OUTPUT_DERIVATIVES: u32 = bits(&[StepComplete, StepFailed, Terminated, Error]);
     /// No state: the function needs a step in progress, which never exists.
     pub const NONE: u32 = 0;
+    // Model Exchange's own functions (FMI 2.0 §3.2.3; Reference-FMUs' masks).
+    pub const EVENT: u32 = bits(&[EventMode]);
+    pub const CONTINUOUS: u32 = bits(&[ContinuousTimeMode]);
+    pub const EVENT_OR_CONTINUOUS: u32 = bits(&[EventMode, ContinuousTimeMode]);
+    pub const STATES_AND_INDICATORS: u32 =
+        bits(&[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error]);
+    pub const DERIVATIVES: u32 = bits(&[EventMode, ContinuousTimeMode, Terminated, Error]);
+    pub const NOMINALS: u32 =
+        bits(&[Instantiated, EventMode, ContinuousTimeMode, Terminated, Error]);
+}
+
+/// An FMI interface's kind: its states, and the sets of states of the calls that every
+/// interface has but each allows in its own states. Data, not code: the state machine is
+/// written once ([`Instance`](super::Instance)) and reads these.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interface {
+    CoSimulation,
+    ModelExchange,
+}
+
+/// The sets of states of one interface (see [`Interface::masks`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Masks {
+    /// Every state the interface has.
+    pub all: u32,
+    /// The state ExitInitializationMode leads to.
+    pub initialized: State,
+    /// The get functions (and GetDirectionalDerivative).
+    pub get: u32,
+    /// The set functions.
+    pub set: u32,
+    /// After initialization: fixed parameters can no longer be set, and the model runs.
+    pub running: u32,
+    pub terminate: u32,
+    /// Get, set and serialize FMU states.
+    pub fmu_state: u32,
+}
+
+impl Interface {
+    const fn make(
+        running: &[State],
+        initialized: State,
+        get: &[State],
+        set: &[State],
+        terminate: &[State],
+    ) -> Masks {
+        use State::*;
+        let get = mask::bits(get);
+        let running = mask::bits(running);
+        Masks {
+            all: running | mask::bits(&[Instantiated, InitializationMode, Error]),
+            initialized,
+            get,
+            set: mask::bits(set),
+            running,
+            terminate: mask::bits(terminate),
+            fmu_state: get | mask::INSTANTIATED,
+        }
+    }
+
+    /// FMI 2.0 §4.2.4 (co-simulation) and §3.2.3 (Model Exchange).
+    pub(crate) fn masks(self) -> &'static Masks {
+        use State::*;
+        const CS: Masks = Interface::make(
+            &[StepComplete, StepFailed, Terminated],
+            StepComplete,
+            &[InitializationMode, StepComplete, StepFailed, Terminated, Error],
+            &[Instantiated, InitializationMode, StepComplete],
+            &[StepComplete, StepFailed],
+        );
+        const ME: Masks = Interface::make(
+            &[EventMode, ContinuousTimeMode, Terminated],
+            EventMode,
+            &[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error],
+            &[Instantiated, InitializationMode, EventMode, ContinuousTimeMode],
+            &[EventMode, ContinuousTimeMode],
+        );
+        match self {
+            Interface::CoSimulation => &CS,
+            Interface::ModelExchange => &ME,
+        }
+    }
+
+    /// The interface's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Interface::CoSimulation => "co-simulation",
+            Interface::ModelExchange => "Model Exchange",
+        }
+    }
+
+    pub(crate) fn to_index(self) -> u64 {
+        self as u64
+    }
+
+    pub(crate) fn from_index(k: u64) -> Option<Interface> {
+        [Interface::CoSimulation, Interface::ModelExchange].get(k as usize).copied()
+    }
 }
 
 /// The status of a call: fmi2Status and fmi3Status have these values.

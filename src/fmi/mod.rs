@@ -2,12 +2,13 @@
 //! through the traits of [`model`].
 //!
 //! - [`description`]: the types that describe an interface (variables, units, flags).
-//! - [`model`]: the traits a model implements ([`Model`], [`CoSimulation`]), and the values
+//! - [`model`]: the traits a model implements ([`Model`], [`CoSimulation`],
+//!   [`ModelExchange`]), and the values
 //!   that cross them.
 //! - `machine`: the states, the masks of allowed calls, the statuses and the error that
 //!   carries a status to the edge.
 //! - `instance`: one instance: logging, the lifecycle, get and set by value reference, FMU
-//!   state snapshots. `cosim`: the co-simulation calls.
+//!   state snapshots. `cosim`: the co-simulation calls; `exchange`: Model Exchange's.
 //! - `snapshot`: what an FMU state holds, and its byte format.
 //!
 //! No `unsafe` and no I/O: an interface layer (`crate::fmi2`) turns the C calls into calls
@@ -16,6 +17,7 @@
 
 mod cosim;
 pub mod description;
+mod exchange;
 mod instance;
 mod machine;
 pub mod model;
@@ -23,9 +25,10 @@ mod snapshot;
 
 pub use cosim::{STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_PENDING, STATUS_TERMINATED};
 pub use description::{BaseType, VarInfo, LOG_CATEGORIES};
+pub use exchange::{EventInfo, StepEnd};
 pub use instance::{Func, Instance, Logger};
-pub use machine::{FmiError, FmiResult, State, Status};
-pub use model::{CoSimulation, Model, Notes, Restore, Setup, StepFailure, Value};
+pub use machine::{FmiError, FmiResult, Interface, State, Status};
+pub use model::{CoSimulation, Model, ModelExchange, Notes, Restore, Setup, StepFailure, Value};
 pub use snapshot::{
     deserialize, field_offsets, reseal, reseal_checksum, serialize, version, visit_optional,
     Snapshot, CORE_VERSION, HEADER,

@@ -6,7 +6,7 @@
 #![forbid(unsafe_code)]
 
 use super::description::VarInfo;
-use super::machine::State;
+use super::machine::{Interface, State};
 use crate::visit::StateVisitor;
 use std::fmt;
 
@@ -77,10 +77,12 @@ pub struct StepFailure {
 /// What a model's part of a restored state must agree with: the core's part, read before it.
 #[derive(Clone, Copy, Debug)]
 pub struct Restore {
+    /// The interface of the instance that saved it.
+    pub interface: Interface,
     pub setup: Setup,
     /// The instance's state.
     pub state: State,
-    /// The communication time.
+    /// The communication time (co-simulation), or the time the host set (Model Exchange).
     pub time: f64,
 }
 
@@ -116,8 +118,10 @@ pub trait Model: Clone + fmt::Debug + Sized {
     /// be set in `state`. Warnings go to `notes`.
     fn set(&mut self, vr: u32, value: Value, state: State, notes: &mut Notes)
         -> Result<(), String>;
-    /// Leaves initialization: checks every value together and starts at `setup.start_time`.
-    fn start(&mut self, setup: &Setup) -> Result<(), String>;
+    /// Leaves initialization: checks every value together and starts at `setup.start_time`,
+    /// for `interface` (its own integrator for co-simulation, the equations alone for Model
+    /// Exchange).
+    fn start(&mut self, setup: &Setup, interface: Interface) -> Result<(), String>;
 
     /// Visits the model's part of a state, after the core's: a writer reads each field, a
     /// reader overwrites and checks them against `at`.
@@ -147,4 +151,42 @@ pub trait CoSimulation: Model {
     ) -> Result<Option<f64>, String>;
     /// The outputs that have derivatives of order `order`, for messages.
     fn outputs_with_derivatives(order: i32) -> &'static str;
+}
+
+/// A model whose equations a host integrates (FMI Model Exchange): continuous states x, their
+/// derivatives, event indicators, and the event iteration. The core checks the state, the
+/// counts and the finiteness of the host's numbers before it calls these.
+pub trait ModelExchange: Model {
+    /// The number of event indicators, fixed by the model description.
+    const INDICATORS: usize;
+
+    /// Builds the equations from the current values if they are not built (initialization
+    /// mode: the start state, as the outputs are there).
+    fn prepare_exchange(&mut self, setup: &Setup) -> Result<(), String>;
+    /// The number of continuous states the current values make.
+    fn state_count(&self) -> usize;
+    /// The name of continuous state `k`, for messages.
+    fn state_name(&self, k: usize) -> String;
+    fn set_time(&mut self, t: f64);
+    /// Sets every state; the core has checked the count and that they are finite.
+    fn set_states(&mut self, x: &[f64]);
+    fn states(&self, out: &mut [f64]);
+    /// The derivatives at the current time, states and inputs; an error where the equations
+    /// cannot be evaluated there.
+    fn derivatives(&mut self, out: &mut [f64]) -> Result<(), String>;
+    fn event_indicators(&mut self, out: &mut [f64]);
+    fn nominals(&self, out: &mut [f64]);
+    /// One pass of the event iteration at the current time. Messages go to `notes`.
+    fn update_discrete_states(&mut self, notes: &mut Notes) -> super::EventInfo;
+    /// After an integrator step the host accepted: the model's checks at the step's end.
+    fn completed_integrator_step(&mut self, notes: &mut Notes) -> Result<super::StepEnd, String>;
+    /// The directional derivative of `unknowns` with respect to `knowns` along `seed` into
+    /// `out` (the core has checked that `seed` is finite; the model checks the rest).
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), String>;
 }

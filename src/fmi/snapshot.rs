@@ -17,7 +17,7 @@
 //! give an error, never a panic.
 #![forbid(unsafe_code)]
 
-use super::machine::State;
+use super::machine::{Interface, State};
 use super::model::{Model, Restore, Setup};
 use crate::hash::fnv1a_64;
 use crate::math::same_time;
@@ -26,9 +26,12 @@ use crate::visit::StateVisitor;
 /// Everything an FMU state holds: the whole instance except its name and logger.
 #[derive(Clone, Debug)]
 pub struct Snapshot<M> {
+    /// The interface of the instance that made it: a state restores only into its own.
+    pub(crate) interface: Interface,
     pub(crate) state: State,
     pub(crate) setup: Setup,
-    /// The communication time: the start time, then the end of the last step.
+    /// The communication time: the start time, then the end of the last step (co-simulation),
+    /// or the time the host set last (Model Exchange).
     pub(crate) time: f64,
     pub(crate) last_successful_time: f64,
     /// fmi2Terminated: the FMU stopped the run.
@@ -37,8 +40,9 @@ pub struct Snapshot<M> {
 }
 
 impl<M: Model> Snapshot<M> {
-    pub(crate) fn new() -> Snapshot<M> {
+    pub(crate) fn new(interface: Interface) -> Snapshot<M> {
         Snapshot {
+            interface,
             state: State::Instantiated,
             setup: Setup::NONE,
             time: 0.0,
@@ -51,7 +55,7 @@ impl<M: Model> Snapshot<M> {
 
 const MAGIC: &[u8; 8] = b"FMUSTATE";
 /// Version of the core's part of the byte format; bump it when [`visit_core`] changes.
-pub const CORE_VERSION: u32 = 5;
+pub const CORE_VERSION: u32 = 6;
 const GUID_LEN: usize = 38;
 /// Bytes of the frame before the payload: magic, version, GUID, payload length.
 pub const HEADER: usize = 8 + 4 + GUID_LEN + 8;
@@ -128,7 +132,7 @@ pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
         return Err("checksum mismatch: the state bytes are corrupt".into());
     }
     let mut reader = Reader { bytes: &body[HEADER..], pos: 0, error: None };
-    let mut snapshot = Snapshot::new();
+    let mut snapshot = Snapshot::new(Interface::CoSimulation);
     let visited = visit(&mut snapshot, &mut reader);
     if let Some(e) = reader.error {
         return Err(e);
@@ -152,7 +156,7 @@ fn visit<M: Model>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(),
             format!("field `tolerance` = {tol:?} is out of range: must be {allowed}")
         })?;
     }
-    let at = Restore { setup: s.setup, state: s.state, time: s.time };
+    let at = Restore { interface: s.interface, setup: s.setup, state: s.state, time: s.time };
     s.model.visit_state(v, &at)
 }
 
@@ -179,11 +183,20 @@ pub fn visit_optional(
 
 /// Visits the core's fields; the writer reads them, the reader overwrites and checks them.
 fn visit_core<M>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(), String> {
+    let mut interface = s.interface.to_index();
+    v.count("interface", &mut interface);
+    s.interface = Interface::from_index(interface).ok_or_else(|| {
+        format!("field `interface` = {interface} is not an interface: must be 0 or 1")
+    })?;
     let mut state = s.state.to_index();
     v.count("state", &mut state);
-    s.state = State::from_index(state)
-        .filter(|s| *s != State::Fatal)
-        .ok_or_else(|| format!("field `state` = {state} is not a state an FMU state can hold"))?;
+    let all = s.interface.masks().all;
+    s.state = State::from_index(state).filter(|st| st.bit() & all != 0).ok_or_else(|| {
+        format!(
+            "field `state` = {state} is not a state a {} FMU state can hold",
+            s.interface.name()
+        )
+    })?;
     let setup = &mut s.setup;
     visit_optional(v, "tolerance_defined", "tolerance", &mut setup.tolerance)?;
     v.real("start_time", &mut setup.start_time);

@@ -1,5 +1,5 @@
-//! The 34 functions of the FMI 2.0 common and co-simulation API, exported under their
-//! standard names.
+//! The 44 functions of the FMI 2.0 API, common, Model Exchange and co-simulation, exported
+//! under their standard names.
 //!
 //! Each function checks the instance pointer against the registry of live instances, turns
 //! C pointers into slices and strings, and calls the safe [`Instance`] method inside the
@@ -13,7 +13,7 @@ use super::guard::{get_values, guard, null_arg, set_values, slice, slice_mut, te
 use super::registry::{register_state, snapshot, unregister_instance, with_registry};
 use super::types::*;
 use super::{Core, Instance};
-use crate::fmi::{Logger, Status};
+use crate::fmi::{Interface, Logger, Status};
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -408,19 +408,171 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 }
 
 /// # Safety
-/// `c` is an instance. Not provided: logs and returns fmi2Error.
+/// `c` is an instance; `vUnknown_ref` and `dvUnknown` hold `nUnknown` elements,
+/// `vKnown_ref` and `dvKnown` `nKnown`. Model Exchange provides it; co-simulation logs that
+/// it does not and returns fmi2Error.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     c: fmi2Component,
-    _vUnknown_ref: *const fmi2ValueReference,
-    _nUnknown: usize,
-    _vKnown_ref: *const fmi2ValueReference,
-    _nKnown: usize,
-    _dvKnown: *const fmi2Real,
-    _dvUnknown: *mut fmi2Real,
+    vUnknown_ref: *const fmi2ValueReference,
+    nUnknown: usize,
+    vKnown_ref: *const fmi2ValueReference,
+    nKnown: usize,
+    dvKnown: *const fmi2Real,
+    dvUnknown: *mut fmi2Real,
 ) -> fmi2Status {
-    guard(c, "fmi2GetDirectionalDerivative", Instance::get_directional_derivative)
+    const F: &str = "fmi2GetDirectionalDerivative";
+    guard(c, F, |inst| {
+        if inst.interface() == Interface::CoSimulation {
+            return inst.get_directional_derivative();
+        }
+        // SAFETY: each pointer holds its count of elements (the function's contract).
+        let args = unsafe {
+            (
+                slice(vUnknown_ref, nUnknown),
+                slice(vKnown_ref, nKnown),
+                slice(dvKnown, nKnown),
+                slice_mut(dvUnknown, nUnknown),
+            )
+        };
+        match args {
+            (Some(u), Some(k), Some(dv), Some(out)) => {
+                inst.get_directional_derivative_exchange(u, k, dv, out)
+            }
+            (None, ..) => null_arg(inst, F, "vUnknown_ref", nUnknown),
+            (_, None, ..) => null_arg(inst, F, "vKnown_ref", nKnown),
+            (_, _, None, _) => null_arg(inst, F, "dvKnown", nKnown),
+            (.., None) => null_arg(inst, F, "dvUnknown", nUnknown),
+        }
+    })
 }
+
+// ----- Model Exchange -------------------------------------------------------------------------
+
+/// # Safety
+/// `c` is an instance from fmi2Instantiate.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+    guard(c, "fmi2EnterEventMode", Instance::enter_event_mode)
+}
+
+/// # Safety
+/// `c` is an instance; `eventInfo` points to an fmi2EventInfo.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2NewDiscreteStates(
+    c: fmi2Component,
+    eventInfo: *mut fmi2EventInfo,
+) -> fmi2Status {
+    const F: &str = "fmi2NewDiscreteStates";
+    guard(c, F, |inst| {
+        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
+        let Some(out) = (unsafe { eventInfo.as_mut() }) else {
+            return null_arg(inst, F, "eventInfo", 1);
+        };
+        match inst.new_discrete_states() {
+            Ok((info, status)) => {
+                let flag = |b: bool| if b { fmi2True } else { fmi2False };
+                *out = fmi2EventInfo {
+                    newDiscreteStatesNeeded: flag(info.new_discrete_states_needed),
+                    terminateSimulation: flag(info.terminate_simulation),
+                    nominalsOfContinuousStatesChanged: flag(
+                        info.nominals_of_continuous_states_changed,
+                    ),
+                    valuesOfContinuousStatesChanged: flag(info.values_of_continuous_states_changed),
+                    nextEventTimeDefined: flag(info.next_event_time.is_some()),
+                    nextEventTime: info.next_event_time.unwrap_or(0.0),
+                };
+                status
+            }
+            Err(status) => status,
+        }
+    })
+}
+
+/// # Safety
+/// `c` is an instance from fmi2Instantiate.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+    guard(c, "fmi2EnterContinuousTimeMode", Instance::enter_continuous_time_mode)
+}
+
+/// # Safety
+/// `c` is an instance; the two flags point to fmi2Booleans.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+    c: fmi2Component,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+    enterEventMode: *mut fmi2Boolean,
+    terminateSimulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    const F: &str = "fmi2CompletedIntegratorStep";
+    guard(c, F, |inst| {
+        // SAFETY: the pointers are the host's, valid as the FMI function's contract says.
+        let (Some(enter), Some(terminate)) =
+            (unsafe { enterEventMode.as_mut() }, unsafe { terminateSimulation.as_mut() })
+        else {
+            let arg =
+                if enterEventMode.is_null() { "enterEventMode" } else { "terminateSimulation" };
+            return null_arg(inst, F, arg, 1);
+        };
+        match inst.completed_integrator_step() {
+            Ok((end, status)) => {
+                *enter = if end.enter_event_mode { fmi2True } else { fmi2False };
+                *terminate = if end.terminate_simulation { fmi2True } else { fmi2False };
+                status
+            }
+            Err(status) => status,
+        }
+    })
+}
+
+/// # Safety
+/// `c` is an instance from fmi2Instantiate.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    guard(c, "fmi2SetTime", |inst| inst.set_time(time))
+}
+
+/// # Safety
+/// `c` is an instance; `x` holds `nx` elements.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetContinuousStates(
+    c: fmi2Component,
+    x: *const fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    const F: &str = "fmi2SetContinuousStates";
+    // SAFETY: `x` holds `nx` elements (the function's contract).
+    guard(c, F, |inst| match unsafe { slice(x, nx) } {
+        Some(x) => inst.set_continuous_states(x),
+        None => null_arg(inst, F, "x", nx),
+    })
+}
+
+/// The shape of the four Model Exchange functions that fill an array of `n` reals.
+macro_rules! array_function {
+    ($name:ident, $arg:literal, $method:ident) => {
+        /// # Safety
+        /// `c` is an instance; the array holds `n` elements.
+        #[no_mangle]
+        pub unsafe extern "C" fn $name(
+            c: fmi2Component,
+            values: *mut fmi2Real,
+            n: usize,
+        ) -> fmi2Status {
+            // SAFETY: `values` holds `n` elements (the function's contract).
+            guard(c, stringify!($name), |inst| match unsafe { slice_mut(values, n) } {
+                Some(out) => inst.$method(out),
+                None => null_arg(inst, stringify!($name), $arg, n),
+            })
+        }
+    };
+}
+
+array_function!(fmi2GetDerivatives, "derivatives", get_derivatives);
+array_function!(fmi2GetEventIndicators, "eventIndicators", get_event_indicators);
+array_function!(fmi2GetContinuousStates, "x", get_continuous_states);
+array_function!(fmi2GetNominalsOfContinuousStates, "x_nominal", get_nominals);
 
 // ----- co-simulation --------------------------------------------------------------------------
 

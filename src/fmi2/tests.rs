@@ -136,9 +136,9 @@ unsafe fn to_step_complete(c: fmi2Component) {
     }
 }
 
-/// Each of the 30 functions that take an instance, called on `c` with arguments that are
-/// valid in stepComplete (so that only the state can be the reason for a refusal), some
-/// in several variants. `snap` is a live FMU state and `bytes` its serialized form.
+/// Each of the 40 functions that take an instance, called on `c` with arguments that are
+/// valid in stepComplete or, for Model Exchange's, in its modes (so that only the state can
+/// be the reason for a refusal), some in several variants. `snap` is a live FMU state and `bytes` its serialized form.
 ///
 /// # Safety
 /// `c` and `snap` are live.
@@ -162,6 +162,15 @@ unsafe fn instance_calls(
         let bp = bytes.as_ptr() as *const fmi2Byte;
         let op = out.as_mut_ptr() as *mut fmi2Byte;
         let outputs = [Var::V1.vr()];
+        let mut info = fmi2EventInfo {
+            newDiscreteStatesNeeded: -1,
+            terminateSimulation: -1,
+            nominalsOfContinuousStatesChanged: -1,
+            valuesOfContinuousStatesChanged: -1,
+            nextEventTimeDefined: -1,
+            nextEventTime: -1.0,
+        };
+        let mut x = [0.5; 4];
         let calls = vec![
             ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2True, 1, cats.as_ptr())),
             ("fmi2SetDebugLogging", fmi2SetDebugLogging(c, fmi2False, 0, null())),
@@ -217,19 +226,34 @@ unsafe fn instance_calls(
             ("fmi2GetIntegerStatus", fmi2GetIntegerStatus(c, 0, &mut k)),
             ("fmi2GetBooleanStatus", fmi2GetBooleanStatus(c, 3, &mut flag)),
             ("fmi2GetStringStatus", fmi2GetStringStatus(c, 1, string.as_mut_ptr())),
+            ("fmi2EnterEventMode", fmi2EnterEventMode(c)),
+            ("fmi2NewDiscreteStates", fmi2NewDiscreteStates(c, &mut info)),
+            ("fmi2EnterContinuousTimeMode", fmi2EnterContinuousTimeMode(c)),
+            ("fmi2CompletedIntegratorStep", fmi2CompletedIntegratorStep(c, 0, &mut k, &mut flag)),
+            ("fmi2SetTime", fmi2SetTime(c, 0.5)),
+            ("fmi2SetContinuousStates", fmi2SetContinuousStates(c, x.as_ptr(), 4)),
+            ("fmi2GetDerivatives", fmi2GetDerivatives(c, x.as_mut_ptr(), 4)),
+            ("fmi2GetEventIndicators", fmi2GetEventIndicators(c, x.as_mut_ptr(), 2)),
+            ("fmi2GetContinuousStates", fmi2GetContinuousStates(c, x.as_mut_ptr(), 4)),
+            (
+                "fmi2GetNominalsOfContinuousStates",
+                fmi2GetNominalsOfContinuousStates(c, x.as_mut_ptr(), 4),
+            ),
         ];
         // Nothing was written through an output argument.
         assert!(fresh.is_null() && existing == snap && none.is_null());
         assert!(out.iter().all(|x| *x == 0) && size == 0);
         assert_eq!((r, i, b, k, flag), ([0.5], [3], [fmi2True], -1, -1));
         assert!(string[0].is_null());
+        assert_eq!(x, [0.5; 4]);
+        assert_eq!((info.terminateSimulation, info.nextEventTime), (-1, -1.0));
         calls
     }
 }
 
-/// The fatal state, which only a panic reaches, for all 34 functions (FMI 2.0 §2.1.3:
+/// The fatal state, which only a panic reaches, for all 44 functions (FMI 2.0 §2.1.3:
 /// after fmi2Fatal no function may be called). Chosen and checked here:
-/// - each of the 30 functions with a status returns fmi2Error, the status of every
+/// - each of the 40 functions with a status returns fmi2Error, the status of every
 ///   illegal call, and logs "`<function>`: illegal call sequence: not allowed in state
 ///   `fatal`", whatever its arguments (valid ones, NULL arrays, nvr = 0, NULL states);
 /// - none of them touches the instance, its FMU states or the output arguments, and none
@@ -240,7 +264,7 @@ unsafe fn instance_calls(
 ///   work as always. The panic was caught inside one instance, so other instances, old
 ///   and new, are intact: fatal is per instance.
 #[test]
-fn a_fatal_instance_refuses_all_34_functions_and_stays_untouched() {
+fn a_fatal_instance_refuses_all_44_functions_and_stays_untouched() {
     let _g = registering();
     let records: Box<Records> = Box::default();
     let functions = callbacks(&records);
@@ -281,7 +305,7 @@ fn a_fatal_instance_refuses_all_34_functions_and_stays_untouched() {
         let calls = instance_calls(c, snap, &bytes);
         let mut names: Vec<&str> = calls.iter().map(|(n, _)| *n).collect();
         names.dedup();
-        assert_eq!(names.len(), 30, "{names:?}");
+        assert_eq!(names.len(), 40, "{names:?}");
         let log = take(&records);
         assert_eq!(log.len(), calls.len(), "one record per call: {log:#?}");
         for ((name, status), (s, category, fmt, message)) in calls.iter().zip(&log) {

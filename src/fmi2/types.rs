@@ -1,5 +1,5 @@
 //! The C types of FMI 2.0, written by hand from `fmi2TypesPlatform.h` and
-//! `fmi2FunctionTypes.h` (FMI 2.0.4): a dozen type aliases and one struct do not justify
+//! `fmi2FunctionTypes.h` (FMI 2.0.4): a dozen type aliases and two structs do not justify
 //! bindgen and libclang (ARCHITECTURE.md, "Dependencies").
 #![allow(non_snake_case, non_camel_case_types, non_upper_case_globals)]
 #![allow(unsafe_code)]
@@ -51,10 +51,22 @@ pub const fmi2Discard: fmi2Status = crate::fmi::Status::Discard as fmi2Status;
 pub const fmi2Error: fmi2Status = crate::fmi::Status::Error as fmi2Status;
 pub const fmi2Fatal: fmi2Status = crate::fmi::Status::Fatal as fmi2Status;
 
-/// fmi2Type: only co-simulation is provided.
+/// fmi2Type.
 pub const fmi2ModelExchange: fmi2Type = 0;
 pub const fmi2CoSimulation: fmi2Type = 1;
+pub const FMI2_MODEL_EXCHANGE: fmi2Type = fmi2ModelExchange;
 pub const FMI2_COSIMULATION: fmi2Type = fmi2CoSimulation;
+
+/// fmi2EventInfo (Model Exchange's fmi2NewDiscreteStates).
+#[repr(C)]
+pub struct fmi2EventInfo {
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    pub terminateSimulation: fmi2Boolean,
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    pub nextEventTimeDefined: fmi2Boolean,
+    pub nextEventTime: fmi2Real,
+}
 
 /// fmi2StatusKind.
 pub const fmi2DoStepStatus: fmi2StatusKind = crate::fmi::STATUS_DO_STEP;

@@ -7,13 +7,16 @@
 //! ([`Scene`](crate::scene::Scene)), with the experiment's tolerance.
 #![forbid(unsafe_code)]
 
+pub mod exchange;
 pub mod outputs;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_exchange;
 pub mod values;
 pub mod variables;
 
-use crate::fmi::{self, Notes, Restore, Setup, State, StepFailure, Value};
+use crate::fmi::{self, Interface, Notes, Restore, Setup, State, StepFailure, Value};
 use crate::model::{BeamBody, Kinematics, Reactions};
 use crate::scene::PhiSource;
 use crate::sim::Run;
@@ -29,15 +32,18 @@ use variables::{Var, Variable, DEFAULT_EXPERIMENT, VARIABLES};
 pub const MAX_STEPS_PER_DO_STEP: u64 = 1_000_000;
 
 /// Version of the model's part of a serialized state; bump it when `visit_state` changes.
-const STATE_VERSION: u32 = 4;
+const STATE_VERSION: u32 = 5;
 
 /// The beam–body FMU's model: the values, the run from ExitInitializationMode on, the
 /// outputs computed at the current time, and what the host has been told about φ.
 #[derive(Clone, Debug)]
 pub struct BeamBodyFmu {
     pub values: Values,
-    /// The integrator, from ExitInitializationMode on.
+    /// The integrator, from ExitInitializationMode on (co-simulation).
     pub run: Option<Run>,
+    /// The equations a host integrates (Model Exchange), from ExitInitializationMode on, or
+    /// built in initialization mode for the start state.
+    pub exchange: Option<Box<exchange::Exchange>>,
     cache: Cache,
     phi: PhiNotes,
 }
@@ -74,10 +80,11 @@ impl BeamBodyFmu {
         if let Some(k) = self.cache.kinematics {
             return Ok(k);
         }
-        let k = match &self.run {
-            Some(run) => run.kinematics_at(run.t()).map_err(|e| e.to_string())?,
+        let k = match (&self.run, &self.exchange) {
+            (Some(run), _) => run.kinematics_at(run.t()).map_err(|e| e.to_string())?,
+            (None, Some(ex)) => ex.kinematics(&self.values),
             // Initialization mode: the outputs of the start state.
-            None => {
+            (None, None) => {
                 let run = self.build_run(setup)?;
                 run.kinematics_at(setup.start_time).map_err(|e| e.to_string())?
             }
@@ -88,9 +95,10 @@ impl BeamBodyFmu {
 
     /// The model the outputs are computed with.
     fn model(&self) -> Result<BeamBody, String> {
-        match &self.run {
-            Some(run) => Ok(*run.model()),
-            None => BeamBody::new(self.values.settings.params).map_err(|e| e.to_string()),
+        match (&self.run, &self.exchange) {
+            (Some(run), _) => Ok(*run.model()),
+            (None, Some(ex)) => Ok(*ex.eq.model()),
+            (None, None) => BeamBody::new(self.values.settings.params).map_err(|e| e.to_string()),
         }
     }
 
@@ -139,7 +147,8 @@ impl BeamBodyFmu {
     fn phi_used(&mut self, state: State, notes: &mut Notes) {
         self.phi.set = true;
         let law = self.values.settings.phi_source == PhiSource::Law;
-        if !law || state != State::StepComplete || self.phi.told_ignored {
+        let running = matches!(state, State::StepComplete | State::ContinuousTimeMode);
+        if !law || !running || self.phi.told_ignored {
             return;
         }
         self.phi.told_ignored = true;
@@ -152,7 +161,8 @@ impl BeamBodyFmu {
         ));
     }
 
-    /// Before a step with `phi_source` = input: a host that has never set φ runs the model
+    /// Before a step (co-simulation) or at the first event (Model Exchange) with
+    /// `phi_source` = input: a host that has never set φ runs the model
     /// at φ's start value, the body never turning, which is rarely what it means (FMPy's
     /// `simulate_fmu` without an input does so). It is told once.
     fn check_phi_sent(&mut self, notes: &mut Notes) {
@@ -163,8 +173,9 @@ impl BeamBodyFmu {
         self.phi.told_unset = true;
         notes.push(format!(
             "the input `phi` has not been set, so it stays at {:?} rad and the body does not \
-             turn; set `phi` at every communication point, or set `phi_source` = law ({}) \
-             for the paper's turn (said once)",
+             turn; set `phi` at every communication point (Model Exchange: with `dphi` and \
+             `ddphi`, as the host's time goes), or set `phi_source` = law ({}) for the \
+             paper's turn (said once)",
             self.values.input.phi,
             PhiSource::Law as i32 + 1
         ));
@@ -195,7 +206,13 @@ impl BeamBodyFmu {
         }
         let input = &mut values.input;
         v.real("phi", &mut input.phi);
-        values::check_phi(input.phi).map_err(|e| format!("field {e}"))?;
+        let [phi, dphi, ddphi] = [Var::Phi, Var::Dphi, Var::Ddphi].map(Var::info);
+        values::check_input(phi, input.phi).map_err(|e| format!("field {e}"))?;
+        for (k, var) in [dphi, ddphi].into_iter().enumerate() {
+            v.real(var.name, &mut values.rates[k]);
+            values::check_input(var, values.rates[k]).map_err(|e| format!("field {e}"))?;
+        }
+        let input = &mut values.input;
         fmi::visit_optional(v, "pending_dphi_set", "pending_dphi", &mut input.dphi)?;
         fmi::visit_optional(v, "pending_ddphi_set", "pending_ddphi", &mut input.ddphi)?;
         if [input.dphi, input.ddphi].iter().flatten().any(|x| !x.is_finite()) {
@@ -224,6 +241,7 @@ impl fmi::Model for BeamBodyFmu {
         BeamBodyFmu {
             values: Values::from_table(),
             run: None,
+            exchange: None,
             cache: Cache::default(),
             phi: PhiNotes::default(),
         }
@@ -255,23 +273,37 @@ impl fmi::Model for BeamBodyFmu {
         let var = row(vr);
         self.values.set(var, value)?;
         self.cache = Cache::default();
+        if matches!(state, State::Instantiated | State::InitializationMode) {
+            // The start state follows from the values: built again when next needed.
+            self.exchange = None;
+        }
         if var.var == Var::Phi {
             self.phi_used(state, notes);
         }
         Ok(())
     }
 
-    fn start(&mut self, setup: &Setup) -> Result<(), String> {
-        let run = self.build_run(setup)?;
-        self.values.input.dphi = None;
-        self.values.input.ddphi = None;
-        self.run = Some(run);
+    fn start(&mut self, setup: &Setup, interface: Interface) -> Result<(), String> {
+        match interface {
+            Interface::CoSimulation => {
+                let run = self.build_run(setup)?;
+                self.values.input.dphi = None;
+                self.values.input.ddphi = None;
+                self.run = Some(run);
+            }
+            Interface::ModelExchange => {
+                self.exchange = Some(Box::new(self.build_exchange(setup)?));
+            }
+        }
         self.cache = Cache::default();
         Ok(())
     }
 
     fn visit_state<V: StateVisitor>(&mut self, v: &mut V, at: &Restore) -> Result<(), String> {
         self.visit_values(v)?;
+        if at.interface == Interface::ModelExchange {
+            return self.visit_exchange(v, at);
+        }
         let mut has_run = self.run.is_some();
         v.flag("run", &mut has_run);
         let needs_run =

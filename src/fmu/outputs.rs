@@ -41,7 +41,11 @@ pub fn group(var: Var) -> Option<Group> {
         | Var::Drift
         | Var::PhiApplied
         | Var::DphiApplied
-        | Var::DdphiApplied => Group::Motion,
+        | Var::DdphiApplied
+        | Var::DerV1
+        | Var::DerTheta1
+        | Var::DerDv1
+        | Var::DerDtheta1 => Group::Motion,
         _ => return None,
     })
 }
@@ -62,6 +66,11 @@ pub fn motion(var: Var, k: &Kinematics) -> Option<f64> {
         Var::VQuarter => k.quarter[0][0],
         Var::VMid => k.quarter[0][1],
         Var::VThreeQuarter => k.quarter[0][2],
+        // The states' derivatives (Model Exchange's x = (v1, ϑ1, v̇1, ϑ̇1)).
+        Var::DerV1 => k.dv1,
+        Var::DerTheta1 => k.dtheta1,
+        Var::DerDv1 => k.ddv1,
+        Var::DerDtheta1 => k.ddtheta1,
         _ => return None,
     })
 }

@@ -3,7 +3,7 @@
 //! step. Get, check and set by variable, with FMI's conventions (enumerations 1-based).
 #![forbid(unsafe_code)]
 
-use super::variables::{Var, Variable};
+use super::variables::{Causality, Var, Variable};
 use crate::fmi::Value;
 use crate::model::Sample;
 use crate::scene::Scene;
@@ -15,6 +15,8 @@ pub struct Values {
     pub settings: Scene,
     /// The input φ and the derivatives sent for the next step only; its time is the step's.
     pub input: Sample,
+    /// The inputs `dphi` and `ddphi` as the host set them last (Model Exchange's φ′, φ″).
+    pub rates: [f64; 2],
 }
 
 /// A setting's value as FMI has it: enumerations are 1-based.
@@ -53,12 +55,21 @@ fn from_fmi(setting: &Setting, value: Value) -> Result<settings::Value, String> 
     })
 }
 
-/// `phi` must be finite.
-pub(super) fn check_phi(x: f64) -> Result<(), String> {
+/// An input (`phi`, `dphi`, `ddphi`) must be finite.
+pub(super) fn check_input(var: &Variable, x: f64) -> Result<(), String> {
     if x.is_finite() {
         Ok(())
     } else {
-        Err(format!("`phi` = {x:?} is out of range: must be finite"))
+        Err(format!("`{}` = {x:?} is out of range: must be finite", var.name))
+    }
+}
+
+/// The index in [`Values::rates`] of the inputs `dphi` and `ddphi`.
+fn rate(var: Var) -> Option<usize> {
+    match var {
+        Var::Dphi => Some(0),
+        Var::Ddphi => Some(1),
+        _ => None,
     }
 }
 
@@ -69,14 +80,14 @@ impl Values {
         for s in settings::SETTINGS.iter().filter(|s| s.fmu_start.is_some()) {
             settings.set(s.key, s.fmu_default()).expect("the table's start values are in range");
         }
-        Values { settings, input: Sample::value(0.0, 0.0) }
+        Values { settings, input: Sample::value(0.0, 0.0), rates: [0.0; 2] }
     }
 
     /// Checks that `var` takes `value`; the error names the variable and the allowed range.
     pub fn check(&self, var: &Variable, value: Value) -> Result<(), String> {
         match (var.setting, value) {
             (Some(key), _) => Setting::of(key).check(from_fmi(Setting::of(key), value)?).map(drop),
-            (None, Value::Real(x)) if var.var == Var::Phi => check_phi(x),
+            (None, Value::Real(x)) if var.causality == Causality::Input => check_input(var, x),
             _ => unreachable!("outputs are rejected before, other types by type"),
         }
     }
@@ -88,9 +99,15 @@ impl Values {
                 let value = from_fmi(Setting::of(key), value)?;
                 self.settings.set(key, value)
             }
-            (None, Value::Real(x)) if var.var == Var::Phi => {
-                check_phi(x)?;
-                self.input.phi = x;
+            (None, Value::Real(x)) if var.causality == Causality::Input => {
+                check_input(var, x)?;
+                match rate(var.var) {
+                    // Co-simulation takes them as the derivatives for the next step, as
+                    // fmi2SetRealInputDerivatives does.
+                    Some(0) => (self.rates[0], self.input.dphi) = (x, Some(x)),
+                    Some(_) => (self.rates[1], self.input.ddphi) = (x, Some(x)),
+                    None => self.input.phi = x,
+                }
                 Ok(())
             }
             _ => unreachable!("outputs are rejected before, other types by type"),
@@ -102,7 +119,7 @@ impl Values {
         match var.setting {
             Some(key) => Some(to_fmi(self.settings.get(key))),
             None if var.var == Var::Phi => Some(Value::Real(self.input.phi)),
-            None => None,
+            None => rate(var.var).map(|k| Value::Real(self.rates[k])),
         }
     }
 }

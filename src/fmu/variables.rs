@@ -10,8 +10,8 @@
 #![forbid(unsafe_code)]
 
 pub use crate::fmi::description::{
-    BaseType, Capabilities, Causality, DefaultExperiment, Type, Unit, VarInfo, Variability,
-    LOG_CATEGORIES,
+    BaseType, Capabilities, Causality, DefaultExperiment, ExchangeCapabilities, Type, Unit,
+    VarInfo, Variability, LOG_CATEGORIES,
 };
 use crate::hash::fnv1a_128;
 use std::fmt;
@@ -131,6 +131,12 @@ pub enum Var {
     VThreeQuarter,
     Beam,
     BeamGravity,
+    Dphi,
+    Ddphi,
+    DerV1,
+    DerTheta1,
+    DerDv1,
+    DerDtheta1,
 }
 
 impl Var {
@@ -184,6 +190,7 @@ impl fmt::Debug for Variable {
             .field("variability", &i.variability)
             .field("ty", &i.ty)
             .field("description", &i.description)
+            .field("derivative_of", &i.derivative_of)
             .field("setting", &self.setting)
             .finish()
     }
@@ -216,8 +223,34 @@ const fn param(var: Var, key: Key) -> Variable {
             variability: Variability::Fixed,
             ty,
             description: s.description,
+            derivative_of: None,
         },
         setting: Some(key),
+    }
+}
+
+/// A continuous real that is not a parameter: an output or a derivative (no start value),
+/// or an input (start value 0).
+const fn continuous(
+    var: Var,
+    causality: Causality,
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    derivative_of: Option<u32>,
+) -> Variable {
+    let start = if matches!(causality, Causality::Input) { Some(0.0) } else { None };
+    Variable {
+        var,
+        info: VarInfo {
+            name,
+            causality,
+            variability: Variability::Continuous,
+            ty: Type::Real { unit: Some(unit), start, min: None, max: None },
+            description,
+            derivative_of,
+        },
+        setting: None,
     }
 }
 
@@ -227,17 +260,28 @@ const fn output(
     unit: &'static str,
     description: &'static str,
 ) -> Variable {
-    Variable {
-        var,
-        info: VarInfo {
-            name,
-            causality: Causality::Output,
-            variability: Variability::Continuous,
-            ty: Type::Real { unit: Some(unit), start: None, min: None, max: None },
-            description,
-        },
-        setting: None,
-    }
+    continuous(var, Causality::Output, name, unit, description, None)
+}
+
+/// A real input with start value 0.
+const fn input(
+    var: Var,
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+) -> Variable {
+    continuous(var, Causality::Input, name, unit, description, None)
+}
+
+/// The derivative of the continuous state `of` (Model Exchange): a local variable.
+const fn derivative(
+    var: Var,
+    of: Var,
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+) -> Variable {
+    continuous(var, Causality::Local, name, unit, description, Some(of as u32))
 }
 
 /// Every variable, in value-reference order (`VARIABLES[k].vr() == k`, checked by a test).
@@ -262,17 +306,7 @@ pub const VARIABLES: &[Variable] = &[
     param(Var::PhiInterpolation, Key::PhiInterpolation),
     param(Var::RangeCheck, Key::RangeCheck),
     param(Var::StabilityGuard, Key::StabilityGuard),
-    Variable {
-        var: Var::Phi,
-        info: VarInfo {
-            name: "phi",
-            causality: Causality::Input,
-            variability: Variability::Continuous,
-            ty: Type::Real { unit: Some("rad"), start: Some(0.0), min: None, max: None },
-            description: "Hinge angle of the body (used with phi_source = input)",
-        },
-        setting: None,
-    },
+    input(Var::Phi, "phi", "rad", "Hinge angle of the body (used with phi_source = input)"),
     output(Var::V1, "v1", "m", "Tip deflection"),
     output(Var::Theta1, "theta1", "rad", "Rotation of the beam's tip section"),
     output(Var::U2, "u2", "m", "Axial displacement of the hinge (body side)"),
@@ -347,7 +381,59 @@ pub const VARIABLES: &[Variable] = &[
     ),
     param(Var::Beam, Key::Beam),
     param(Var::BeamGravity, Key::BeamGravity),
+    input(
+        Var::Dphi,
+        "dphi",
+        "rad/s",
+        "Rate of the hinge angle, with phi_source = input: Model Exchange uses it with phi at \
+         every evaluation; in co-simulation, set at a communication point, it is phi's first \
+         derivative for the next step, as fmi2SetRealInputDerivatives of order 1",
+    ),
+    input(
+        Var::Ddphi,
+        "ddphi",
+        "rad/s2",
+        "Angular acceleration of the hinge, with phi_source = input: as dphi, of order 2",
+    ),
+    derivative(Var::DerV1, Var::V1, "der(v1)", "m/s", "Time derivative of v1 (Model Exchange)"),
+    derivative(
+        Var::DerTheta1,
+        Var::Theta1,
+        "der(theta1)",
+        "rad/s",
+        "Time derivative of theta1 (Model Exchange)",
+    ),
+    derivative(
+        Var::DerDv1,
+        Var::Dv1,
+        "der(dv1)",
+        "m/s2",
+        "Time derivative of dv1: the tip's acceleration (Model Exchange)",
+    ),
+    derivative(
+        Var::DerDtheta1,
+        Var::Dtheta1,
+        "der(dtheta1)",
+        "rad/s2",
+        "Time derivative of dtheta1: the tip section's angular acceleration (Model Exchange)",
+    ),
 ];
+
+/// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates
+/// (v1, ϑ1) and their rates. Its model description fixes them, so it runs one element of
+/// the quadratic beam (ARCHITECTURE.md, "Model Exchange").
+pub const STATES: [Var; 4] = [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1];
+/// Their derivatives, in the same order.
+pub const DERIVATIVES: [Var; 4] = [Var::DerV1, Var::DerTheta1, Var::DerDv1, Var::DerDtheta1];
+/// The number of event indicators: the margins of the range of validity, l − |v1| and
+/// π/2 − |ϑ1|.
+pub const EVENT_INDICATORS: usize = 2;
+
+/// The `<ModelExchange>` capability flags.
+pub const EXCHANGE_CAPABILITIES: ExchangeCapabilities = ExchangeCapabilities {
+    completed_integrator_step_not_needed: false,
+    provides_directional_derivative: true,
+};
 
 /// The GUID: a 128-bit FNV-1a hash of every table in this file, so any change to the
 /// interface changes it. Formatted like a UUID, in braces.
@@ -360,7 +446,7 @@ pub fn guid() -> &'static str {
     let bytes = GUID.get_or_init(|| {
         let text = format!(
             "{MODEL_IDENTIFIER}|{MODEL_NAME}|{MODEL_DESCRIPTION}|{DEFAULT_EXPERIMENT:?}|\
-             {CAPABILITIES:?}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
+             {CAPABILITIES:?}|{EXCHANGE_CAPABILITIES:?}|{STATES:?}|{EVENT_INDICATORS}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
         );
         let h = fnv1a_128(text.as_bytes());
         let formatted = format!(

@@ -14,8 +14,10 @@ use std::ops::ControlFlow;
 
 pub use crate::scene::{InitialState, PhiSource, Scene};
 
+mod equations;
 mod run;
 
+pub use equations::Equations;
 pub use run::{dae, dae_start, elements_system, two_dof, two_dof_start, PhiInput, Run};
 
 /// Why a run failed.

@@ -139,11 +139,7 @@ impl Run {
     pub fn start(scene: &Scene, t0: f64, first: Sample, max_steps: u64) -> Result<Run, SimError> {
         let input = scene.phi_source == PhiSource::Input;
         let phi0 = if input { first.phi } else { scene.law.eval(t0).phi };
-        let model = scene.check_model(phi0).map_err(SimError::Setting)?;
-        let elements = (!scene.params.is_paper_model())
-            .then(|| BeamN::new(scene.params, scene.formulation).map(Box::new))
-            .transpose()
-            .map_err(SimError::Setting)?;
+        let (model, elements) = super::equations::build_model(scene, phi0)?;
         let (formulation, init) = (scene.formulation, scene.initial);
         let config = scene.solver_config(max_steps);
         let mut run = if input {

@@ -197,6 +197,19 @@ impl Host {
     }
 
     pub fn with_logging(name: &str, logging_on: bool) -> Host {
+        Host::of_type(name, logging_on, CO_SIMULATION)
+    }
+
+    /// A Model Exchange instance, as [`Host::new`] makes a co-simulation one.
+    pub fn exchange(name: &str) -> Host {
+        let h = Host::of_type(name, false, MODEL_EXCHANGE);
+        assert_eq!(h.set_real(Var::Phi, 0.0), OK);
+        h.log.take();
+        h
+    }
+
+    /// An instance of `fmu_type` (fmi2CoSimulation or fmi2ModelExchange).
+    pub fn of_type(name: &str, logging_on: bool, fmu_type: fmi2Type) -> Host {
         let log = Box::<Collector>::default();
         let callbacks = callbacks(log.env());
         let cname = CString::new(name).unwrap();
@@ -205,7 +218,7 @@ impl Host {
         let c = unsafe {
             fmi2Instantiate(
                 cname.as_ptr(),
-                CO_SIMULATION,
+                fmu_type,
                 g.as_ptr(),
                 null(),
                 &*callbacks,

@@ -1,5 +1,6 @@
-//! The FMI 2.0 co-simulation API through the 34 exported `fmi2…` functions, called exactly
-//! as a C host calls them: raw pointers, NULLs, a variadic logger, value references.
+//! The FMI 2.0 API, co-simulation and Model Exchange, through the 44 exported `fmi2…`
+//! functions, called exactly as a C host calls them: raw pointers, NULLs, a variadic
+//! logger, value references.
 //!
 //! The host side (logger, collector, wrappers) is in `common/mod.rs`. Every test checks the
 //! returned fmi2Status and, for errors, that a message naming the problem was logged with
@@ -8,6 +9,7 @@
 mod arguments;
 #[path = "../common/mod.rs"]
 mod common;
+mod exchange;
 mod fmu_state;
 mod instances;
 mod lifecycle;

@@ -55,18 +55,22 @@ pub(crate) fn reach(st: St) -> (Host, f64) {
             h.real_status(LAST_SUCCESSFUL_TIME).1
         }
         Error => {
-            // Each value is in range, but together they leave the mass matrix singular:
-            // a massless beam, J_C = 0 and φ(0) = 0.
-            h.expect_ok(h.set_real(Var::M, 0.0));
-            h.expect_ok(h.set_real(Var::JC, 0.0));
-            h.expect_ok(h.setup(None, 0.0, None));
-            h.expect_ok(h.enter());
-            let status = h.exit();
-            h.expect_error(status, &["fmi2ExitInitializationMode", "singular at the start"]);
+            fail_initialization(&h);
             0.0
         }
     };
     (h, t)
+}
+
+/// Reaches the error state from `instantiated`: each value is in range, but together they
+/// leave the mass matrix singular (a massless beam, J_C = 0 and φ(0) = 0).
+pub(crate) fn fail_initialization(h: &Host) {
+    h.expect_ok(h.set_real(Var::M, 0.0));
+    h.expect_ok(h.set_real(Var::JC, 0.0));
+    h.expect_ok(h.setup(None, 0.0, None));
+    h.expect_ok(h.enter());
+    let status = h.exit();
+    h.expect_error(status, &["fmi2ExitInitializationMode", "singular at the start"]);
 }
 
 /// Checks that `h` is (still) in state `st` and usable there. Consumes the state.

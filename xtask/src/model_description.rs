@@ -10,7 +10,8 @@ use std::path::PathBuf;
 
 use beam_body::fmu::variables::{
     self as vars, Causality, EnumType, Type, Variability, Variable, CAPABILITIES,
-    DEFAULT_EXPERIMENT, ENUM_TYPES, LOG_CATEGORIES, UNITS, VARIABLES,
+    DEFAULT_EXPERIMENT, ENUM_TYPES, EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS,
+    VARIABLES,
 };
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
@@ -94,13 +95,13 @@ fn boolean(b: bool) -> String {
 }
 
 /// `initial` as FMI 2.0 requires it for each causality of ours: parameters are exact (with a
-/// start), outputs are calculated (no start), and the continuous input has none (its start
-/// is implicitly approx).
+/// start), outputs and the derivatives (locals) are calculated (no start), and the continuous
+/// inputs have none (their start is implicitly approx).
 pub fn initial(causality: Causality) -> Option<&'static str> {
     match causality {
         Causality::Parameter => Some("exact"),
         Causality::Input => None,
-        Causality::Output => Some("calculated"),
+        Causality::Output | Causality::Local => Some("calculated"),
     }
 }
 
@@ -109,6 +110,7 @@ pub fn causality_name(causality: Causality) -> &'static str {
         Causality::Parameter => "parameter",
         Causality::Input => "input",
         Causality::Output => "output",
+        Causality::Local => "local",
     }
 }
 
@@ -121,12 +123,22 @@ pub fn variability_name(variability: Variability) -> &'static str {
 
 /// The 1-based `<ModelVariables>` indices of the outputs, for `<ModelStructure>`.
 pub fn output_indices() -> Vec<usize> {
-    VARIABLES
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| v.causality == Causality::Output)
-        .map(|(row, _)| row + 1)
-        .collect()
+    indices(|v| v.causality == Causality::Output)
+}
+
+/// The 1-based indices of the state derivatives, for `<Derivatives>`.
+pub fn derivative_indices() -> Vec<usize> {
+    indices(|v| v.derivative_of.is_some())
+}
+
+/// The 1-based indices of the variables computed at initialization (`initial` =
+/// calculated): the outputs, the states among them, and the derivatives, in index order.
+pub fn initial_unknown_indices() -> Vec<usize> {
+    indices(|v| initial(v.causality) == Some("calculated"))
+}
+
+fn indices(keep: impl Fn(&Variable) -> bool) -> Vec<usize> {
+    VARIABLES.iter().enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
 }
 
 /// The rules the tables must follow for the XML to be valid FMI 2.0, checked before writing.
@@ -150,6 +162,11 @@ fn check_rules(v: &Variable) -> Result {
         (Causality::Output, _, _) => {
             Some("an output must be continuous and have no start value (initial = calculated)")
         }
+        (Causality::Local, Variability::Continuous, false) if v.derivative_of.is_some() => None,
+        (Causality::Local, _, _) => Some(
+            "a local is a state derivative: continuous, with no start value, derivative of a \
+             state",
+        ),
     };
     match problem {
         None => Ok(()),
@@ -202,6 +219,26 @@ impl Doc {
     }
 }
 
+/// The flags `<ModelExchange>` and `<CoSimulation>` share, the last four of each: the
+/// memory, instantiation and FMU-state ones are the same; each has its own
+/// `providesDirectionalDerivative`.
+fn shared_flags(provides_directional_derivative: bool) -> Attrs {
+    let caps = CAPABILITIES;
+    vec![
+        (
+            "canBeInstantiatedOnlyOncePerProcess",
+            boolean(caps.can_be_instantiated_only_once_per_process),
+        ),
+        (
+            "canNotUseMemoryManagementFunctions",
+            boolean(caps.can_not_use_memory_management_functions),
+        ),
+        ("canGetAndSetFMUstate", boolean(caps.can_get_and_set_fmu_state)),
+        ("canSerializeFMUstate", boolean(caps.can_serialize_fmu_state)),
+        ("providesDirectionalDerivative", boolean(provides_directional_derivative)),
+    ]
+}
+
 /// The whole modelDescription.xml.
 pub fn generate() -> Result<String> {
     for v in VARIABLES {
@@ -219,8 +256,21 @@ pub fn generate() -> Result<String> {
             ("version", vars::MODEL_VERSION.into()),
             ("generationTool", vars::GENERATION_TOOL.into()),
             ("variableNamingConvention", "flat".into()),
-            ("numberOfEventIndicators", "0".into()),
+            ("numberOfEventIndicators", EVENT_INDICATORS.to_string()),
         ],
+    );
+
+    let me = EXCHANGE_CAPABILITIES;
+    doc.empty(
+        "ModelExchange",
+        [
+            ("modelIdentifier", vars::MODEL_IDENTIFIER.into()),
+            ("needsExecutionTool", boolean(false)),
+            ("completedIntegratorStepNotNeeded", boolean(me.completed_integrator_step_not_needed)),
+        ]
+        .into_iter()
+        .chain(shared_flags(me.provides_directional_derivative))
+        .collect(),
     );
 
     let caps = CAPABILITIES;
@@ -239,18 +289,8 @@ pub fn generate() -> Result<String> {
     attrs.extend([
         // sic: FMI 2.0's spelling.
         ("canRunAsynchronuously", boolean(caps.can_run_asynchronuously)),
-        (
-            "canBeInstantiatedOnlyOncePerProcess",
-            boolean(caps.can_be_instantiated_only_once_per_process),
-        ),
-        (
-            "canNotUseMemoryManagementFunctions",
-            boolean(caps.can_not_use_memory_management_functions),
-        ),
-        ("canGetAndSetFMUstate", boolean(caps.can_get_and_set_fmu_state)),
-        ("canSerializeFMUstate", boolean(caps.can_serialize_fmu_state)),
-        ("providesDirectionalDerivative", boolean(caps.provides_directional_derivative)),
     ]);
+    attrs.extend(shared_flags(caps.provides_directional_derivative));
     doc.empty("CoSimulation", attrs);
 
     doc.start("UnitDefinitions", vec![]);
@@ -298,9 +338,13 @@ pub fn generate() -> Result<String> {
     doc.end("ModelVariables");
 
     doc.start("ModelStructure", vec![]);
-    for list in ["Outputs", "InitialUnknowns"] {
+    for (list, indices) in [
+        ("Outputs", output_indices()),
+        ("Derivatives", derivative_indices()),
+        ("InitialUnknowns", initial_unknown_indices()),
+    ] {
         doc.start(list, vec![]);
-        for index in output_indices() {
+        for index in indices {
             doc.empty("Unknown", vec![("index", index.to_string())]);
         }
         doc.end(list);
@@ -351,6 +395,10 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
                     attrs.push((key, real(value)?));
                 }
             }
+            if let Some(state) = v.derivative_of {
+                // The state's 1-based index in <ModelVariables>: its value reference + 1.
+                attrs.push(("derivative", (state + 1).to_string()));
+            }
             doc.empty("Real", attrs);
         }
         Type::Integer { start, min, max } => doc.empty(
@@ -377,7 +425,7 @@ mod tests {
 
     use beam_body::fmu::variables::{
         self as vars, Causality, Type, Variability, CAPABILITIES, DEFAULT_EXPERIMENT, ENUM_TYPES,
-        LOG_CATEGORIES, UNITS, VARIABLES,
+        EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS, VARIABLES,
     };
 
     use super::{generate, path, real, stale_message};
@@ -468,12 +516,13 @@ mod tests {
         assert_eq!(format!("version = \"{}\"", a["version"]), line);
         assert_eq!(a["generationTool"], vars::GENERATION_TOOL);
         assert_eq!(a["variableNamingConvention"], "flat");
-        assert_eq!(a["numberOfEventIndicators"], "0");
+        assert_eq!(a["numberOfEventIndicators"], EVENT_INDICATORS.to_string());
 
         let names: Vec<&str> = root.children.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             names,
             [
+                "ModelExchange",
                 "CoSimulation",
                 "UnitDefinitions",
                 "TypeDefinitions",
@@ -483,6 +532,41 @@ mod tests {
                 "ModelStructure"
             ]
         );
+
+        let me = root.child("ModelExchange").unwrap();
+        assert!(me.children.is_empty());
+        let a = attrs(
+            me,
+            &[
+                "modelIdentifier",
+                "needsExecutionTool",
+                "completedIntegratorStepNotNeeded",
+                "canBeInstantiatedOnlyOncePerProcess",
+                "canNotUseMemoryManagementFunctions",
+                "canGetAndSetFMUstate",
+                "canSerializeFMUstate",
+                "providesDirectionalDerivative",
+            ],
+        );
+        let (c, e) = (CAPABILITIES, EXCHANGE_CAPABILITIES);
+        let flag = |b: bool| if b { "true" } else { "false" };
+        assert_eq!(a["modelIdentifier"], vars::MODEL_IDENTIFIER);
+        assert_eq!(a["needsExecutionTool"], "false");
+        assert_eq!(
+            a["completedIntegratorStepNotNeeded"],
+            flag(e.completed_integrator_step_not_needed)
+        );
+        assert_eq!(
+            a["canBeInstantiatedOnlyOncePerProcess"],
+            flag(c.can_be_instantiated_only_once_per_process)
+        );
+        assert_eq!(
+            a["canNotUseMemoryManagementFunctions"],
+            flag(c.can_not_use_memory_management_functions)
+        );
+        assert_eq!(a["canGetAndSetFMUstate"], flag(c.can_get_and_set_fmu_state));
+        assert_eq!(a["canSerializeFMUstate"], flag(c.can_serialize_fmu_state));
+        assert_eq!(a["providesDirectionalDerivative"], flag(e.provides_directional_derivative));
 
         let cs = root.child("CoSimulation").unwrap();
         assert!(cs.children.is_empty());
@@ -502,8 +586,6 @@ mod tests {
                 "providesDirectionalDerivative",
             ],
         );
-        let c = CAPABILITIES;
-        let flag = |b: bool| if b { "true" } else { "false" };
         assert_eq!(a["modelIdentifier"], vars::MODEL_IDENTIFIER);
         assert_eq!(a["needsExecutionTool"], "false");
         assert_eq!(
@@ -603,6 +685,7 @@ mod tests {
                 Causality::Parameter => ("parameter", "fixed", Some("exact")),
                 Causality::Input => ("input", "continuous", None),
                 Causality::Output => ("output", "continuous", Some("calculated")),
+                Causality::Local => ("local", "continuous", Some("calculated")),
             };
             assert_eq!(a["causality"], causality, "{}", at("causality"));
             assert_eq!(a["variability"], variability, "{}", at("variability"));
@@ -618,14 +701,20 @@ mod tests {
             match v.ty {
                 Type::Real { unit, start, min, max } => {
                     assert_eq!(t.name, "Real", "{}", at("type"));
-                    let a = attrs(t, &["unit", "start", "min", "max"]);
+                    let a = attrs(t, &["unit", "start", "min", "max", "derivative"]);
+                    // A derivative names its state by its 1-based index, which is the
+                    // state's value reference + 1 (value references are the row index).
+                    let derivative = a.get("derivative").map(|k| k.parse::<u32>().unwrap() - 1);
+                    assert_eq!(derivative, v.derivative_of, "{}", at("derivative"));
                     assert_eq!(a.get("unit").copied(), unit, "{}", at("unit"));
                     for (key, value) in [("start", start), ("min", min), ("max", max)] {
                         let written = a.get(key).map(|x| f64_of(x).to_bits());
                         assert_eq!(written, value.map(f64::to_bits), "{}", at(key));
                     }
                     match v.causality {
-                        Causality::Output => assert!(start.is_none(), "{}", at("start")),
+                        Causality::Output | Causality::Local => {
+                            assert!(start.is_none(), "{}", at("start"))
+                        }
                         _ => assert!(start.is_some(), "{}", at("start")),
                     }
                 }
@@ -654,20 +743,25 @@ mod tests {
         }
     }
 
+    /// `<Outputs>` lists the outputs, `<Derivatives>` the state derivatives,
+    /// `<InitialUnknowns>` both (every variable with initial = calculated), each in index
+    /// order, as FMI 2.0 §2.2.8 requires.
     #[test]
-    fn model_structure_lists_exactly_the_outputs() {
+    fn model_structure_lists_outputs_derivatives_and_initial_unknowns() {
         let root = root();
-        let outputs: Vec<usize> = VARIABLES
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| v.causality == Causality::Output)
-            .map(|(row, _)| row + 1)
-            .collect();
-        assert!(!outputs.is_empty());
+        let rows = |keep: &dyn Fn(&vars::Variable) -> bool| -> Vec<usize> {
+            VARIABLES.iter().enumerate().filter(|(_, v)| keep(v)).map(|(r, _)| r + 1).collect()
+        };
+        let outputs = rows(&|v| v.causality == Causality::Output);
+        let derivatives = rows(&|v| v.causality == Causality::Local);
+        let unknowns = rows(&|v| matches!(v.causality, Causality::Output | Causality::Local));
+        assert_eq!(derivatives.len(), vars::DERIVATIVES.len());
         let structure = root.child("ModelStructure").unwrap();
         let names: Vec<&str> = structure.children.iter().map(|c| c.name.as_str()).collect();
-        assert_eq!(names, ["Outputs", "InitialUnknowns"]);
-        for list in ["Outputs", "InitialUnknowns"] {
+        assert_eq!(names, ["Outputs", "Derivatives", "InitialUnknowns"]);
+        for (list, expected) in
+            [("Outputs", outputs), ("Derivatives", derivatives), ("InitialUnknowns", unknowns)]
+        {
             let indices: Vec<usize> = structure
                 .child(list)
                 .unwrap()
@@ -678,7 +772,7 @@ mod tests {
                     attrs(u, &["index"])["index"].parse().unwrap()
                 })
                 .collect();
-            assert_eq!(indices, outputs, "{list}");
+            assert_eq!(indices, expected, "{list}");
         }
     }
 }

@@ -1,0 +1,322 @@
+//! The beam–body model under Model Exchange: the host's integrator steps the equations
+//! ([`Equations`]) of the paper's coordinates, x = (v1, ϑ1, v̇1, ϑ̇1); the model gives their
+//! derivatives, the range of validity as event indicators, and the law's end as a time event.
+#![forbid(unsafe_code)]
+
+use super::variables::{Var, DERIVATIVES, EVENT_INDICATORS, STATES};
+use super::BeamBodyFmu;
+use crate::fmi::{self, EventInfo, Notes, Setup, StepEnd};
+use crate::model::{BeamModel, Kinematics, Phi, PhiPiece, RangeCheck};
+use crate::sim::Equations;
+use crate::visit::StateVisitor;
+
+/// The equations and where the host has put them: time, states, and what the event
+/// iteration has settled.
+#[derive(Clone, Debug)]
+pub struct Exchange {
+    pub eq: Equations,
+    pub t: f64,
+    pub x: Vec<f64>,
+    /// The law's end t_rot has been handled in event mode: φ holds from there on.
+    pub turned: bool,
+    /// `range_check` now: `warn` becomes `off` once it has warned.
+    pub range: RangeCheck,
+}
+
+impl Exchange {
+    /// The host's φ, φ′, φ″ (phi_source = input).
+    fn host(values: &super::values::Values) -> Phi {
+        Phi { phi: values.input.phi, dphi: values.rates[0], ddphi: values.rates[1] }
+    }
+
+    /// The piece of φ at the current time.
+    pub fn piece(&self, values: &super::values::Values) -> PhiPiece {
+        self.eq.piece(self.t, self.turned, Self::host(values))
+    }
+
+    pub fn kinematics(&self, values: &super::values::Values) -> Kinematics {
+        self.eq.kinematics(self.t, self.piece(values), &self.x)
+    }
+
+    /// Checks the range at the current state: `None` inside it (or with the check off and
+    /// the coordinates numbers), else why and whether the run must end. `warn` then turns
+    /// the check off.
+    fn range_violation(&mut self, values: &super::values::Values) -> Option<(String, bool)> {
+        let check = self.range != RangeCheck::Off;
+        let v = self.eq.check_range(self.t, self.piece(values), &self.x, check).err()?;
+        let what = format!(
+            "at t = {:?} the state left the range of validity: `{}` = {:?}, allowed {}",
+            self.t, v.name, v.value, v.allowed
+        );
+        Some(match self.range {
+            RangeCheck::Warn => {
+                self.range = RangeCheck::Off;
+                (
+                    format!("{what}; the run goes on outside it (range_check = warn, said once)"),
+                    false,
+                )
+            }
+            RangeCheck::Stop => {
+                (format!("{what}; terminateSimulation = true (range_check = stop)"), true)
+            }
+            RangeCheck::Off => (format!("{what}; terminateSimulation = true"), true),
+        })
+    }
+}
+
+/// FMI 2.0 Model Exchange fixes its states in the model description: the paper's two
+/// coordinates of the quadratic beam in one element (damping allowed).
+fn check_fmi2(values: &super::values::Values) -> Result<(), String> {
+    let p = &values.settings.params;
+    if p.n_elements != 1 || p.beam != BeamModel::Quadratic {
+        return Err(format!(
+            "Model Exchange runs the quadratic beam in one element: its model description \
+             declares 4 continuous states (v1, theta1, dv1, dtheta1), and `n_elements` = {} \
+             with `beam` = {} would need {}; use co-simulation for this beam",
+            p.n_elements,
+            p.beam.name(),
+            4 * p.n_elements
+        ));
+    }
+    Ok(())
+}
+
+impl BeamBodyFmu {
+    /// The Model Exchange equations at the start time from the current values.
+    pub(super) fn build_exchange(&self, setup: &Setup) -> Result<Exchange, String> {
+        check_fmi2(&self.values)?;
+        let eq = Equations::new(&self.values.settings, self.values.input.phi)
+            .map_err(|e| e.to_string())?;
+        let t = setup.start_time;
+        let turned = eq.law().is_some_and(|law| t >= law.breakpoint());
+        let range = eq.range_check();
+        let mut ex = Exchange { eq, t, x: Vec::new(), turned, range };
+        ex.x = ex.eq.start(ex.piece(&self.values)).map_err(|e| e.to_string())?;
+        Ok(ex)
+    }
+
+    fn exchange(&self) -> &Exchange {
+        self.exchange.as_deref().expect("the core calls this after the equations exist")
+    }
+
+    fn exchange_mut(&mut self) -> &mut Exchange {
+        self.cache = Default::default();
+        self.exchange.as_deref_mut().expect("the core calls this after the equations exist")
+    }
+
+    /// The Model Exchange part of a state: the states, the event flags, the range's.
+    pub(super) fn visit_exchange<V: StateVisitor>(
+        &mut self,
+        v: &mut V,
+        at: &fmi::Restore,
+    ) -> Result<(), String> {
+        let mut has = self.exchange.is_some();
+        v.flag("exchange", &mut has);
+        use fmi::State::*;
+        let needs = matches!(at.state, EventMode | ContinuousTimeMode | Terminated);
+        let may = needs || matches!(at.state, InitializationMode | Error);
+        if (needs && !has) || (has && !may) {
+            return Err(format!("field `exchange` = {has} contradicts the state `{:?}`", at.state));
+        }
+        if !has {
+            self.exchange = None;
+            return Ok(());
+        }
+        if self.exchange.is_none() {
+            let built = self.build_exchange(&at.setup);
+            self.exchange =
+                Some(Box::new(built.map_err(|e| format!("the saved parameters: {e}"))?));
+        }
+        let ex = self.exchange.as_deref_mut().expect("built above");
+        let mut n = ex.x.len() as u64;
+        v.count("exchange.states", &mut n);
+        if n != ex.x.len() as u64 {
+            return Err(format!(
+                "field `exchange.states` = {n}: the saved parameters make {} states",
+                ex.x.len()
+            ));
+        }
+        for x in ex.x.iter_mut() {
+            v.real("exchange.x", x);
+        }
+        if ex.x.iter().any(|x| !x.is_finite()) {
+            return Err("field `exchange.x` holds a non-finite state".into());
+        }
+        v.flag("exchange.turned", &mut ex.turned);
+        let mut warned = ex.range != ex.eq.range_check();
+        v.flag("exchange.range_warned", &mut warned);
+        if warned && ex.eq.range_check() != RangeCheck::Warn {
+            return Err("field `exchange.range_warned`: set, but range_check is not warn".into());
+        }
+        ex.range = if warned { RangeCheck::Off } else { ex.eq.range_check() };
+        ex.t = at.time;
+        if let Some(law) = ex.eq.law() {
+            if ex.turned && ex.t < law.breakpoint() {
+                return Err(format!(
+                    "field `exchange.turned` = true before the law's end t_rot = {:?} (time = \
+                     {:?})",
+                    law.breakpoint(),
+                    ex.t
+                ));
+            }
+        } else if ex.turned {
+            return Err(
+                "field `exchange.turned` = true without the law (phi_source = input)".into()
+            );
+        }
+        Ok(())
+    }
+}
+
+impl fmi::ModelExchange for BeamBodyFmu {
+    const INDICATORS: usize = EVENT_INDICATORS;
+
+    fn prepare_exchange(&mut self, setup: &Setup) -> Result<(), String> {
+        if self.exchange.is_none() {
+            self.exchange = Some(Box::new(self.build_exchange(setup)?));
+        }
+        Ok(())
+    }
+
+    fn state_count(&self) -> usize {
+        match &self.exchange {
+            Some(ex) => ex.x.len(),
+            None => 4 * self.values.settings.params.n_elements,
+        }
+    }
+
+    fn state_name(&self, k: usize) -> String {
+        STATES.get(k).map_or_else(|| format!("x[{k}]"), |v| format!("`{}`", v.info().name))
+    }
+
+    fn set_time(&mut self, t: f64) {
+        self.exchange_mut().t = t;
+    }
+
+    fn set_states(&mut self, x: &[f64]) {
+        self.exchange_mut().x.copy_from_slice(x);
+    }
+
+    fn states(&self, out: &mut [f64]) {
+        out.copy_from_slice(&self.exchange().x);
+    }
+
+    fn derivatives(&mut self, out: &mut [f64]) -> Result<(), String> {
+        let ex = self.exchange();
+        ex.eq.derivatives(ex.t, ex.piece(&self.values), &ex.x, out);
+        Ok(())
+    }
+
+    fn event_indicators(&mut self, out: &mut [f64]) {
+        let ex = self.exchange();
+        let exact = ex.eq.elements().is_some_and(|e| matches!(e, crate::model::BeamN::Exact(_)));
+        if ex.range == RangeCheck::Off || exact {
+            // Nothing to locate: the check is off, or the exact beam's one limit (a
+            // centreline that crosses itself) is checked at each step's end.
+            out.fill(1.0);
+            return;
+        }
+        let (v1, theta1) = ex.eq.tip(&ex.x);
+        let l = ex.eq.model().params.l;
+        out[0] = l - v1.abs();
+        out[1] = std::f64::consts::FRAC_PI_2 - theta1.abs();
+    }
+
+    fn nominals(&self, out: &mut [f64]) {
+        // SI units: the paper's scene has |v1| ≤ 0.24 m, |ϑ1| ≤ 0.41 rad and rates of a few
+        // per second, so 1 is their scale.
+        out.fill(1.0);
+    }
+
+    fn update_discrete_states(&mut self, notes: &mut Notes) -> EventInfo {
+        self.check_phi_sent(notes);
+        let values = self.values.clone();
+        let ex = self.exchange_mut();
+        let mut info = EventInfo::default();
+        if let Some(law) = ex.eq.law().copied() {
+            let bp = law.breakpoint();
+            if !ex.turned && (ex.t >= bp || crate::math::same_time(ex.t, bp, 0.0)) {
+                ex.turned = true;
+            }
+            if !ex.turned {
+                info.next_event_time = Some(bp);
+            }
+        }
+        if let Some((msg, stop)) = ex.range_violation(&values) {
+            info.terminate_simulation = stop;
+            notes.push(msg);
+        }
+        info
+    }
+
+    fn completed_integrator_step(&mut self, notes: &mut Notes) -> Result<StepEnd, String> {
+        let values = self.values.clone();
+        let ex = self.exchange_mut();
+        let mut end = StepEnd::default();
+        if let Some((msg, stop)) = ex.range_violation(&values) {
+            end.terminate_simulation = stop;
+            notes.push(msg);
+        }
+        Ok(end)
+    }
+
+    fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        if knowns.len() != seed.len() || unknowns.len() != out.len() {
+            return Err(format!(
+                "{} known value references with {} seeds, {} unknowns with {} values",
+                knowns.len(),
+                seed.len(),
+                unknowns.len(),
+                out.len()
+            ));
+        }
+        let names = |vars: &[Var]| -> String {
+            vars.iter()
+                .map(|v| format!("`{}` ({})", v.info().name, v.vr()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let inputs = [Var::Phi, Var::Dphi, Var::Ddphi];
+        let ex = self.exchange();
+        let mut vx = vec![0.0; ex.x.len()];
+        let mut vhost = [0.0; 3];
+        for (vr, s) in knowns.iter().zip(seed) {
+            if let Some(k) = STATES.iter().position(|v| v.vr() == *vr) {
+                vx[k] += s;
+            } else if let Some(k) = inputs.iter().position(|v| v.vr() == *vr) {
+                vhost[k] += s;
+            } else {
+                return Err(format!(
+                    "known value reference {vr} is not a continuous state or an input: must \
+                     be one of {}, {}",
+                    names(&STATES),
+                    names(&inputs)
+                ));
+            }
+        }
+        let vhost = Phi { phi: vhost[0], dphi: vhost[1], ddphi: vhost[2] };
+        let host = Exchange::host(&self.values);
+        let df = ex.eq.directional(ex.t, ex.turned, host, &ex.x, &vx, vhost);
+        for (vr, slot) in unknowns.iter().zip(out.iter_mut()) {
+            *slot = if let Some(k) = DERIVATIVES.iter().position(|v| v.vr() == *vr) {
+                df[k]
+            } else if let Some(k) = STATES.iter().position(|v| v.vr() == *vr) {
+                vx[k]
+            } else {
+                return Err(format!(
+                    "unknown value reference {vr} is not a state derivative or a state: must \
+                     be one of {}, {}",
+                    names(&DERIVATIVES),
+                    names(&STATES)
+                ));
+            };
+        }
+        Ok(())
+    }
+}
