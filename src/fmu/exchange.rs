@@ -8,6 +8,7 @@ use super::BeamBodyFmu;
 use crate::fmi::{self, EventInfo, Notes, Setup, StepEnd};
 use crate::model::{BeamModel, Kinematics, Phi, PhiPiece, RangeCheck};
 use crate::sim::Equations;
+use crate::solver::RangeViolation;
 use crate::visit::StateVisitor;
 
 /// The equations and where the host has put them: time, states, and what the event
@@ -41,9 +42,20 @@ impl Exchange {
     /// Checks the range at the current state: `None` inside it (or with the check off and
     /// the coordinates numbers), else why and whether the run must end. `warn` then turns
     /// the check off.
-    fn range_violation(&mut self, values: &super::values::Values) -> Option<(String, bool)> {
+    ///
+    /// At an event (`at_event`), a state on a limit to within the indicators' rounding counts
+    /// as past it: that is where the host's root finding puts the event, on either side.
+    fn range_violation(
+        &mut self,
+        values: &super::values::Values,
+        at_event: bool,
+    ) -> Option<(String, bool)> {
         let check = self.range != RangeCheck::Off;
-        let v = self.eq.check_range(self.t, self.piece(values), &self.x, check).err()?;
+        let v = match self.eq.check_range(self.t, self.piece(values), &self.x, check) {
+            Err(v) => v,
+            Ok(()) if at_event => self.on_a_limit()?,
+            Ok(()) => return None,
+        };
         let what = format!(
             "at t = {:?} the state left the range of validity: `{}` = {:?}, allowed {}",
             self.t, v.name, v.value, v.allowed
@@ -61,6 +73,35 @@ impl Exchange {
             }
             RangeCheck::Off => (format!("{what}; terminateSimulation = true"), true),
         })
+    }
+}
+
+impl Exchange {
+    /// The event indicators: the margins of the quadratic model's range of validity, l − |v1|
+    /// and π/2 − |ϑ1|; `None` with the check off, or for the exact beam, whose one limit (a
+    /// centreline that crosses itself) is checked at each step's end.
+    fn margins(&self) -> Option<[f64; 2]> {
+        let exact = self.eq.elements().is_some_and(|e| matches!(e, crate::model::BeamN::Exact(_)));
+        if self.range == RangeCheck::Off || exact {
+            return None;
+        }
+        let (v1, theta1) = self.eq.tip(&self.x);
+        let l = self.eq.model().params.l;
+        Some([l - v1.abs(), std::f64::consts::FRAC_PI_2 - theta1.abs()])
+    }
+
+    /// The limit the state is on, to within 1e-12 of it (relative), as a violation.
+    fn on_a_limit(&self) -> Option<RangeViolation> {
+        let m = self.margins()?;
+        let (v1, theta1) = self.eq.tip(&self.x);
+        let l = self.eq.model().params.l;
+        if m[0] <= 1e-12 * l {
+            Some(RangeViolation { name: "v1", value: v1, allowed: "|v1| <= l" })
+        } else if m[1] <= 1e-12 {
+            Some(RangeViolation { name: "theta1", value: theta1, allowed: "|theta1| <= pi/2" })
+        } else {
+            None
+        }
     }
 }
 
@@ -208,18 +249,11 @@ impl fmi::ModelExchange for BeamBodyFmu {
     }
 
     fn event_indicators(&mut self, out: &mut [f64]) {
-        let ex = self.exchange();
-        let exact = ex.eq.elements().is_some_and(|e| matches!(e, crate::model::BeamN::Exact(_)));
-        if ex.range == RangeCheck::Off || exact {
-            // Nothing to locate: the check is off, or the exact beam's one limit (a
-            // centreline that crosses itself) is checked at each step's end.
-            out.fill(1.0);
-            return;
+        match self.exchange().margins() {
+            Some(m) => out.copy_from_slice(&m),
+            // Nothing to locate: constant indicators.
+            None => out.fill(1.0),
         }
-        let (v1, theta1) = ex.eq.tip(&ex.x);
-        let l = ex.eq.model().params.l;
-        out[0] = l - v1.abs();
-        out[1] = std::f64::consts::FRAC_PI_2 - theta1.abs();
     }
 
     fn nominals(&self, out: &mut [f64]) {
@@ -242,7 +276,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
                 info.next_event_time = Some(bp);
             }
         }
-        if let Some((msg, stop)) = ex.range_violation(&values) {
+        if let Some((msg, stop)) = ex.range_violation(&values, true) {
             info.terminate_simulation = stop;
             notes.push(msg);
         }
@@ -253,7 +287,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
         let values = self.values.clone();
         let ex = self.exchange_mut();
         let mut end = StepEnd::default();
-        if let Some((msg, stop)) = ex.range_violation(&values) {
+        if let Some((msg, stop)) = ex.range_violation(&values, false) {
             end.terminate_simulation = stop;
             notes.push(msg);
         }

@@ -20,8 +20,15 @@
  *   3. threads: K instances (each with its own phi_end and EI) created, stepped over the paper's
  *               scene and freed in K concurrent threads; the trajectories must be bit-identical
  *               to the same K configurations run one after another in the main thread.
+ *   4. exchange: the paper's scene under Model Exchange, integrated by this host itself with the
+ *               classical Runge-Kutta method at a fixed step of 0.5 ms, through the FMU's time
+ *               event at the law's end (the event iteration, then continuous-time mode again),
+ *               with fmi2CompletedIntegratorStep and the event indicators at every step; v1,
+ *               theta1, u2 at every communication point (with --me-out, a CSV as -o's). The FMU
+ *               state taken at t = 5.1 s, serialized and restored into a second instance, must
+ *               continue bit for bit; calls out of Model Exchange's sequence are refused.
  *
- * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB]
+ * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--me-out TRAJ.csv] [--so LIB]
  *                     [--save-state S STATE.bin] [--resume STATE.bin]
  *                     [--no-dlclose | --reloads R]
  *        host UNZIPDIR --bench-dostep ROUNDS [--feed FEED] [--h H]
@@ -342,8 +349,24 @@ typedef fmi2Status fmi2SetRealInputDerivativesTYPE(fmi2Component, const fmi2Valu
 typedef fmi2Status fmi2GetRealStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Real *);
 typedef fmi2Status fmi2GetBooleanStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Boolean *);
 
-/* Every function a CS FMU must export (fmi-notes: 25 common + 9 CS); all are looked up so that
- * a missing export fails here, as it would in FMPy. */
+/* Model Exchange (fmi2FunctionTypes.h). */
+typedef struct {
+    fmi2Boolean newDiscreteStatesNeeded;
+    fmi2Boolean terminateSimulation;
+    fmi2Boolean nominalsOfContinuousStatesChanged;
+    fmi2Boolean valuesOfContinuousStatesChanged;
+    fmi2Boolean nextEventTimeDefined;
+    fmi2Real nextEventTime;
+} fmi2EventInfo;
+typedef fmi2Status fmi2NewDiscreteStatesTYPE(fmi2Component, fmi2EventInfo *);
+typedef fmi2Status fmi2CompletedIntegratorStepTYPE(fmi2Component, fmi2Boolean, fmi2Boolean *,
+                                                   fmi2Boolean *);
+typedef fmi2Status fmi2SetTimeTYPE(fmi2Component, fmi2Real);
+typedef fmi2Status fmi2SetContinuousStatesTYPE(fmi2Component, const fmi2Real[], size_t);
+typedef fmi2Status fmi2GetRealArrayTYPE(fmi2Component, fmi2Real[], size_t); /* derivatives etc. */
+
+/* Every function an FMU with both interfaces must export (fmi-notes: 25 common + 9 CS + 10 ME);
+ * all are looked up so that a missing export fails here, as it would in FMPy. */
 static const char *const ALL_EXPORTS[] = {
     "fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging", "fmi2Instantiate",
     "fmi2FreeInstance", "fmi2SetupExperiment", "fmi2EnterInitializationMode",
@@ -353,7 +376,10 @@ static const char *const ALL_EXPORTS[] = {
     "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate",
     "fmi2GetDirectionalDerivative", "fmi2SetRealInputDerivatives", "fmi2GetRealOutputDerivatives",
     "fmi2DoStep", "fmi2CancelStep", "fmi2GetStatus", "fmi2GetRealStatus", "fmi2GetIntegerStatus",
-    "fmi2GetBooleanStatus", "fmi2GetStringStatus",
+    "fmi2GetBooleanStatus", "fmi2GetStringStatus", "fmi2EnterEventMode", "fmi2NewDiscreteStates",
+    "fmi2EnterContinuousTimeMode", "fmi2CompletedIntegratorStep", "fmi2SetTime",
+    "fmi2SetContinuousStates", "fmi2GetDerivatives", "fmi2GetEventIndicators",
+    "fmi2GetContinuousStates", "fmi2GetNominalsOfContinuousStates",
 };
 #define N_EXPORTS (sizeof ALL_EXPORTS / sizeof ALL_EXPORTS[0])
 
@@ -383,6 +409,16 @@ typedef struct {
     fmi2SetRealInputDerivativesTYPE *SetRealInputDerivatives;
     fmi2GetRealStatusTYPE *GetRealStatus;
     fmi2GetBooleanStatusTYPE *GetBooleanStatus;
+    fmi2ComponentFunctionTYPE *EnterEventMode;
+    fmi2NewDiscreteStatesTYPE *NewDiscreteStates;
+    fmi2ComponentFunctionTYPE *EnterContinuousTimeMode;
+    fmi2CompletedIntegratorStepTYPE *CompletedIntegratorStep;
+    fmi2SetTimeTYPE *SetTime;
+    fmi2SetContinuousStatesTYPE *SetContinuousStates;
+    fmi2GetRealArrayTYPE *GetDerivatives;
+    fmi2GetRealArrayTYPE *GetEventIndicators;
+    fmi2GetRealArrayTYPE *GetContinuousStates;
+    fmi2GetRealArrayTYPE *GetNominalsOfContinuousStates;
 } Api;
 
 /* ----- the model's interface, read from modelDescription.xml ------------------------------- */
@@ -617,6 +653,16 @@ static int load_api(Lib lib, Api *api, Err *err) {
     SYM(SetRealInputDerivatives, "fmi2SetRealInputDerivatives");
     SYM(GetRealStatus, "fmi2GetRealStatus");
     SYM(GetBooleanStatus, "fmi2GetBooleanStatus");
+    SYM(EnterEventMode, "fmi2EnterEventMode");
+    SYM(NewDiscreteStates, "fmi2NewDiscreteStates");
+    SYM(EnterContinuousTimeMode, "fmi2EnterContinuousTimeMode");
+    SYM(CompletedIntegratorStep, "fmi2CompletedIntegratorStep");
+    SYM(SetTime, "fmi2SetTime");
+    SYM(SetContinuousStates, "fmi2SetContinuousStates");
+    SYM(GetDerivatives, "fmi2GetDerivatives");
+    SYM(GetEventIndicators, "fmi2GetEventIndicators");
+    SYM(GetContinuousStates, "fmi2GetContinuousStates");
+    SYM(GetNominalsOfContinuousStates, "fmi2GetNominalsOfContinuousStates");
 #undef SYM
     if (strcmp(api->GetVersion(), "2.0") != 0)
         return fail(err, "fmi2GetVersion() = `%s`, expected `2.0`", api->GetVersion());
@@ -846,6 +892,237 @@ static int check_scene(const Host *h, const char *out_csv, StateIO *io, Err *err
     return 0;
 }
 
+/* ----- 4: Model Exchange -------------------------------------------------------------------- */
+
+#define NX 4      /* continuous states: v1, theta1, dv1, dtheta1 (the model description's) */
+#define NZ 2      /* event indicators: the margins of the range of validity */
+#define ME_H 5e-4 /* the host's Runge-Kutta step; H = 20 of them, t_rot = 0.85 s = 1700 */
+#define ME_PER_POINT 20
+#define ME_SAVE_POINT 510 /* t = 5.1 s */
+
+/* x' = f(t, x) through the FMU. */
+static int me_rhs(const Host *h, fmi2Component c, LogCtx *lc, double t, const double *x,
+                  double *dx, Err *err) {
+    const Api *f = h->api;
+    const char *who = lc->name;
+    OK(f->SetTime(c, t));
+    OK(f->SetContinuousStates(c, x, NX));
+    OK(f->GetDerivatives(c, dx, NX));
+    return 0;
+out:
+    return -1;
+}
+
+/* The event iteration at the current time; the next time event into *t_event (NAN: none). */
+static int me_event(const Host *h, fmi2Component c, LogCtx *lc, double *t_event, Err *err) {
+    const Api *f = h->api;
+    const char *who = lc->name;
+    fmi2EventInfo info = {fmi2True, 0, 0, 0, 0, 0.0};
+    for (int pass = 0; info.newDiscreteStatesNeeded; pass++) {
+        if (pass == 10) return fail(err, "%s: the event iteration does not end", who);
+        OK(f->NewDiscreteStates(c, &info));
+        if (info.terminateSimulation) return fail(err, "%s: terminateSimulation at an event", who);
+    }
+    *t_event = info.nextEventTimeDefined ? info.nextEventTime : NAN;
+    OK(f->EnterContinuousTimeMode(c));
+    return 0;
+out:
+    return -1;
+}
+
+/* Integrates from step k0 to k1 (t = k*ME_H; the time event lands exactly on *t_event), the
+ * outputs at every communication point into `out`. A state at ME_SAVE_POINT goes to `save`
+ * (a malloc'ed buffer and its size) when `save` is not NULL. */
+static int me_integrate(const Host *h, fmi2Component c, LogCtx *lc, int k0, int k1,
+                        double *t_event, Traj *out, char **save, size_t *save_size,
+                        long *events, Err *err) {
+    const Api *f = h->api;
+    const Model *m = h->model;
+    const char *who = lc->name;
+    const fmi2ValueReference out_vr[3] = {m->v1, m->theta1, m->u2};
+    double x[NX], k1v[NX], k2v[NX], k3v[NX], k4v[NX], xs[NX], z[NZ], y[3];
+    fmi2FMUstate s = NULL;
+    int rc = -1;
+    OK(f->GetContinuousStates(c, x, NX));
+    for (int k = k0 + 1; k <= k1; k++) {
+        double t0 = (k - 1) * ME_H, t1 = k * ME_H;
+        int event = !isnan(*t_event) && fabs(t1 - *t_event) < 0.5 * ME_H;
+        if (event) t1 = *t_event;
+        double hs = t1 - t0;
+        if (me_rhs(h, c, lc, t0, x, k1v, err)) goto out;
+        for (int i = 0; i < NX; i++) xs[i] = x[i] + 0.5 * hs * k1v[i];
+        if (me_rhs(h, c, lc, t0 + 0.5 * hs, xs, k2v, err)) goto out;
+        for (int i = 0; i < NX; i++) xs[i] = x[i] + 0.5 * hs * k2v[i];
+        if (me_rhs(h, c, lc, t0 + 0.5 * hs, xs, k3v, err)) goto out;
+        for (int i = 0; i < NX; i++) xs[i] = x[i] + hs * k3v[i];
+        if (me_rhs(h, c, lc, t1, xs, k4v, err)) goto out;
+        for (int i = 0; i < NX; i++)
+            x[i] += hs / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i]);
+        OK(f->SetTime(c, t1));
+        OK(f->SetContinuousStates(c, x, NX));
+        fmi2Boolean enter = -1, terminate = -1;
+        OK(f->CompletedIntegratorStep(c, fmi2True, &enter, &terminate));
+        if (enter != fmi2False || terminate != fmi2False) {
+            fail(err, "%s: fmi2CompletedIntegratorStep at t = %g: enterEventMode = %d, "
+                      "terminateSimulation = %d", who, t1, enter, terminate);
+            goto out;
+        }
+        OK(f->GetEventIndicators(c, z, NZ));
+        if (!(z[0] > 0.0 && z[1] > 0.0)) {
+            fail(err, "%s: an event indicator crossed zero at t = %g: %g, %g", who, t1, z[0], z[1]);
+            goto out;
+        }
+        if (event) {
+            OK(f->EnterEventMode(c));
+            if (me_event(h, c, lc, t_event, err)) goto out;
+            ++*events;
+        }
+        if (k % ME_PER_POINT == 0) {
+            int p = k / ME_PER_POINT;
+            OK(f->GetReal(c, out_vr, 3, y));
+            if (!isfinite(y[0]) || !isfinite(y[1]) || !isfinite(y[2])) {
+                fail(err, "%s: non-finite output at t = %g", who, t1);
+                goto out;
+            }
+            out->v1[p] = y[0], out->theta1[p] = y[1], out->u2[p] = y[2];
+            if (save && p == ME_SAVE_POINT) {
+                OK(f->GetFMUstate(c, &s));
+                OK(f->SerializedFMUstateSize(c, s, save_size));
+                if (!(*save = malloc(*save_size))) {
+                    fail(err, "out of memory");
+                    goto out;
+                }
+                OK(f->SerializeFMUstate(c, s, *save, *save_size));
+                OK(f->FreeFMUstate(c, &s));
+            }
+        }
+    }
+    rc = 0;
+out:
+    if (s) f->FreeFMUstate(c, &s);
+    return rc;
+}
+
+/* A Model Exchange instance of the paper's scene (the law), initialized, in event mode. */
+static fmi2Component me_start(const Host *h, LogCtx *lc, fmi2CallbackFunctions *cb, Err *err) {
+    const Api *f = h->api;
+    const Model *m = h->model;
+    const char *who = lc->name;
+    const fmi2Integer law = PHI_SOURCE_LAW;
+    fmi2Component c = instantiate(h, lc, cb, m->guid, fmi2ModelExchange, fmi2False);
+    if (!c) {
+        fail(err, "%s: fmi2Instantiate(fmi2ModelExchange) returned NULL (%s)", who, lc->last);
+        return NULL;
+    }
+    OK(f->SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, T_END));
+    OK(f->SetInteger(c, &m->phi_source, 1, &law));
+    OK(f->EnterInitializationMode(c));
+    OK(f->ExitInitializationMode(c));
+    return c;
+out:
+    f->FreeInstance(c);
+    return NULL;
+}
+
+static int check_exchange(const Host *h, const char *out_csv, Err *err) {
+    static Traj a, b; /* off the stack */
+    const Api *f = h->api;
+    const Model *m = h->model;
+    LogCtx ctx, ctx2, *lc = &ctx;
+    fmi2CallbackFunctions cb, cb2;
+    const char *who = "exchange";
+    char *bytes = NULL;
+    size_t size = 0;
+    long events = 0, events2 = 0;
+    fmi2FMUstate s = NULL;
+    fmi2Component c2 = NULL;
+    int rc = -1;
+    ctx_init(&ctx, who);
+    ctx_init(&ctx2, "exchange, restored");
+    double t0 = now(), t_event = NAN, y[3];
+    fmi2Component c = me_start(h, &ctx, &cb, err);
+    if (!c) return -1;
+    /* Out of sequence: co-simulation's step, and continuous states outside continuous-time
+     * mode. */
+    REFUSED(f->DoStep(c, 0.0, H, fmi2True));
+    double x[NX] = {0}, nominal[NX];
+    REFUSED(f->SetContinuousStates(c, x, NX));
+    REFUSED(f->GetContinuousStates(c, x, NX + 1));
+    if (me_event(h, c, lc, &t_event, err)) goto out;
+    if (!(fabs(t_event - 0.85) < 1e-12)) {
+        fail(err, "%s: the next time event is %g, expected t_rot = 0.85", who, t_event);
+        goto out;
+    }
+    OK(f->GetNominalsOfContinuousStates(c, nominal, NX));
+    for (int i = 0; i < NX; i++)
+        if (!(nominal[i] > 0.0)) {
+            fail(err, "%s: nominal %d is %g", who, i, nominal[i]);
+            goto out;
+        }
+    const fmi2ValueReference out_vr[3] = {m->v1, m->theta1, m->u2};
+    OK(f->GetReal(c, out_vr, 3, y));
+    a.v1[0] = y[0], a.theta1[0] = y[1], a.u2[0] = y[2];
+    if (me_integrate(h, c, lc, 0, N_STEPS * ME_PER_POINT, &t_event, &a, &bytes, &size, &events,
+                     err))
+        goto out;
+    double seconds = now() - t0;
+    OK(f->Terminate(c));
+    if (!bytes || events != 1) {
+        fail(err, "%s: %ld events (expected 1), state %s", who, events, bytes ? "saved" : "missing");
+        goto out;
+    }
+
+    /* The state in a second instance: it continues bit for bit. */
+    lc = &ctx2;
+    who = ctx2.name;
+    if (!(c2 = me_start(h, &ctx2, &cb2, err))) goto out;
+    OK(f->DeSerializeFMUstate(c2, bytes, size, &s));
+    OK(f->SetFMUstate(c2, s));
+    OK(f->FreeFMUstate(c2, &s));
+    double none = NAN;
+    if (me_integrate(h, c2, lc, ME_SAVE_POINT * ME_PER_POINT, N_STEPS * ME_PER_POINT, &none, &b,
+                     NULL, NULL, &events2, err))
+        goto out;
+    for (int p = ME_SAVE_POINT + 1; p < N_POINTS; p++)
+        if (bits(a.v1[p]) != bits(b.v1[p]) || bits(a.theta1[p]) != bits(b.theta1[p]) ||
+            bits(a.u2[p]) != bits(b.u2[p])) {
+            fail(err, "%s: the restored run differs at t = %g: v1 %.17g against %.17g", who,
+                 p * H, b.v1[p], a.v1[p]);
+            goto out;
+        }
+    OK(f->Terminate(c2));
+    printf("exchange points=%d h=%g steps=%d events=%ld state_bytes=%zu restored=identical "
+           "seconds=%.3f\n", N_POINTS, ME_H, N_STEPS * ME_PER_POINT, events, size, seconds);
+    printf("exchange_final v1=%.17g theta1=%.17g u2=%.17g\n", a.v1[N_STEPS], a.theta1[N_STEPS],
+           a.u2[N_STEPS]);
+    if (out_csv) {
+        FILE *o = fopen(out_csv, "wb");
+        if (!o) {
+            fail(err, "cannot write %s", out_csv);
+            goto out;
+        }
+        fprintf(o, "t,v1,theta1,u2,v1_bits,theta1_bits,u2_bits\n");
+        for (int k = 0; k < N_POINTS; k++)
+            fprintf(o, "%.17g,%.17g,%.17g,%.17g,%016llx,%016llx,%016llx\n", k * H, a.v1[k],
+                    a.theta1[k], a.u2[k], (unsigned long long)bits(a.v1[k]),
+                    (unsigned long long)bits(a.theta1[k]), (unsigned long long)bits(a.u2[k]));
+        if (fclose(o) != 0) {
+            fail(err, "cannot write %s", out_csv);
+            goto out;
+        }
+    }
+    rc = 0;
+out:
+    if (s) f->FreeFMUstate(c2 ? c2 : c, &s);
+    free(bytes);
+    f->FreeInstance(c);
+    if (c2) f->FreeInstance(c2);
+    if (rc == 0 && (ctx.count[fmi2Warning] || ctx.count[fmi2Discard] || ctx2.count[fmi2Warning] ||
+                    ctx2.count[fmi2Discard] || ctx2.count[fmi2Error]))
+        rc = fail(err, "exchange: the FMU logged warnings or errors: %s / %s", ctx.last, ctx2.last);
+    return rc;
+}
+
 /* ----- 2: instantiate/free cycles ----------------------------------------------------------- */
 
 /* setupExperiment, enter and exit initialization mode with the law (start time 0, no stop). */
@@ -943,17 +1220,17 @@ static int one_cycle(const Host *h, int i, Err *err) {
     case 1:
         c = instantiate(h, &ctx, &cb, m->guid, fmi2CoSimulation, (fmi2Boolean)(i % 2));
         break;
-    case 2: /* rejected instantiations: wrong GUID, model exchange; each logs one error */
+    case 2: /* rejected instantiations: wrong GUID, an unknown fmi2Type; each logs one error */
         for (int bad = 0; bad < 2; bad++) {
             ctx.expect_errors = 1;
             fmi2Component x =
                 bad == 0 ? instantiate(h, &ctx, &cb, "{not-the-guid}", fmi2CoSimulation, fmi2False)
-                         : instantiate(h, &ctx, &cb, m->guid, fmi2ModelExchange, fmi2False);
+                         : instantiate(h, &ctx, &cb, m->guid, (fmi2Type)7, fmi2False);
             ctx.expect_errors = 0;
             if (x) {
                 f->FreeInstance(x);
                 fail(err, "%s: fmi2Instantiate accepted a %s", name,
-                     bad == 0 ? "wrong GUID" : "model-exchange type");
+                     bad == 0 ? "wrong GUID" : "type that is neither interface");
                 goto out;
             }
         }
@@ -1266,7 +1543,8 @@ static int bench_dostep(const Host *h, int rounds, const char *only, double only
 /* ----- main --------------------------------------------------------------------------------- */
 
 static int usage(void) {
-    fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--so LIB] "
+    fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] "
+                    "[--me-out TRAJ.csv] [--so LIB] "
                     "[--save-state S STATE.bin] [--resume STATE.bin] "
                     "[--no-dlclose | --reloads R]\n"
                     "       host UNZIPDIR --bench-dostep ROUNDS [--feed FEED] [--h H]\n");
@@ -1282,7 +1560,7 @@ static void resources_uri(char *dst, size_t cap, const char *unzipdir) {
 }
 
 int main(int argc, char **argv) {
-    const char *unzipdir = NULL, *out_csv = NULL, *so = NULL;
+    const char *unzipdir = NULL, *out_csv = NULL, *me_csv = NULL, *so = NULL;
     int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1, bench_rounds = -1;
     const char *bench_only = NULL;
     double bench_h = 0.0;
@@ -1295,6 +1573,8 @@ int main(int argc, char **argv) {
             threads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "-o") && a + 1 < argc)
             out_csv = argv[++a];
+        else if (!strcmp(argv[a], "--me-out") && a + 1 < argc)
+            me_csv = argv[++a];
         else if (!strcmp(argv[a], "--reloads") && a + 1 < argc)
             reloads = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--so") && a + 1 < argc)
@@ -1346,6 +1626,7 @@ int main(int argc, char **argv) {
     if (check_scene(&host, out_csv, &io, &err)) goto failed;
     if (check_cycles(&host, cycles, &err)) goto failed;
     if (threads > 0 && check_threads(&host, threads, &err)) goto failed;
+    if (check_exchange(&host, me_csv, &err)) goto failed;
 
     long bad = atomic_load(&g_bad_log);
     if (bad) {

@@ -5,7 +5,7 @@ libc and libm, by facts that do not come from the parser itself:
 - the x86-64 ELF's exports all resolve through the dynamic loader (ctypes), and every versioned
   symbol it needs from libc.so.6 is defined with that version by the system's libc.so.6;
 - libm.so.6 defines pow@GLIBC_2.29 (glibc 2.29's new pow) and its DT_SONAME is libm.so.6;
-- the five builds export the same 34 names (PE, ELF and Mach-O decode them in different ways);
+- the five builds export the same 44 names (PE, ELF and Mach-O decode them in different ways);
 - a Mach-O's export trie lists exactly the symbol table's external definitions (two encodings);
 - a universal file's slice parses the same as the slice on its own (offsets are slice-relative);
 - the code signature verifies as built; one flipped byte anywhere in the signed range makes exactly

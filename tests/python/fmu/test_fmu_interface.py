@@ -64,7 +64,14 @@ def test_packaged_model_description_is_the_committed_one(fmu_file):
 def test_capability_flags_and_default_experiment(fmu_file):
     md = read_model_description(str(fmu_file))
     assert md.fmiVersion == "2.0"
-    assert md.modelExchange is None, "the FMU provides co-simulation only"
+    me = md.modelExchange
+    assert me is not None and me.modelIdentifier == "BeamBody", "Model Exchange beside co-simulation"
+    assert me.providesDirectionalDerivative is True and me.completedIntegratorStepNotNeeded is False
+    assert md.numberOfEventIndicators == 2
+    # The states are the paper's coordinates and their rates; each derivative names its state.
+    states = [d.variable.derivative.name for d in md.derivatives]
+    assert states == ["v1", "theta1", "dv1", "dtheta1"], states
+    assert [d.variable.name for d in md.derivatives] == [f"der({s})" for s in states]
     cs = md.coSimulation
     assert cs is not None and cs.modelIdentifier == "BeamBody"
     flags = {

@@ -13,6 +13,9 @@ What is compared, and how closely:
   take different step sequences and carry different global errors of a few hundred rtol*max|y| on
   this 12-period scene (test_fmu_law.py measured K = 35 ... 361). K_TOL = 1000 is the bound used there.
 - 8 threads against the same 8 configurations run one after another: bit for bit (checked in C).
+- Model Exchange (check 4 of host.c): the host's own RK4 at 0.5 ms through the time event at t_rot,
+  against the CLI at rtol 1e-11: within ME_TOL (measured 7.1e-9 m in v1, 1.3e-8 rad in theta1: RK4's
+  error at that step); the FMU state restored at 5.1 s continues bit for bit (checked in C).
 
 Valgrind: the main run keeps the library loaded at exit (--no-dlclose) and must show no error and no
 definitely/indirectly/possibly lost block, without suppressions. A second run unloads and reloads the
@@ -42,6 +45,7 @@ from c_host_util import (CYCLES, H, N_STEPS, THREADS, host_failure, parse_summar
 from fmu_util import PHI_SOURCE_LAW, T_END, Slave, cli, missing_tool
 
 RTOL = 1e-6  # the FMU's default tolerance (DefaultExperiment) and the CLI's default rtol
+ME_TOL = 1e-7  # |host's RK4 on the Model Exchange equations - CLI at rtol 1e-11| (see the docstring)
 K_TOL = 1000.0  # see the module docstring
 
 # Under valgrind the full counts take about 5 s on this machine (one core: valgrind serialises
@@ -70,10 +74,13 @@ VALGRIND_ARGS = [
 
 @pytest.fixture(scope="module")
 def native(host_exe, fmu_unzipdir, tmp_path_factory):
-    """One native run with the full counts; its trajectory file and stdout."""
+    """One native run with the full counts; its trajectory file and stdout (the Model Exchange
+    trajectory is beside it, `paper_me.csv`)."""
     traj = tmp_path_factory.mktemp("c_host_run") / "paper.csv"
+    me = traj.with_name("paper_me.csv")
     proc, seconds = run_host(
-        [host_exe, fmu_unzipdir, "--cycles", CYCLES, "--threads", THREADS, "-o", traj], NATIVE_TIMEOUT
+        [host_exe, fmu_unzipdir, "--cycles", CYCLES, "--threads", THREADS, "-o", traj, "--me-out", me],
+        NATIVE_TIMEOUT,
     )
     return proc, seconds, traj
 
@@ -93,8 +100,13 @@ def test_native_host_passes(native, fmu_report):
     assert (s["threads"]["n"], s["threads"]["identical"], s["threads"]["distinct"]) == (
         str(THREADS), "1", str(THREADS)
     ), proc.stdout
+    assert (s["exchange"]["points"], s["exchange"]["events"], s["exchange"]["restored"]) == (
+        str(N_STEPS + 1), "1", "identical"
+    ), proc.stdout
     tag = "c_host native"
     fmu_report.figure(tag, "wall_seconds", seconds, f"{CYCLES} cycles, {THREADS} threads, compile excluded")
+    fmu_report.figure(tag, "exchange_seconds", float(s["exchange"]["seconds"]),
+                      f"{s['exchange']['steps']} RK4 steps of Model Exchange")
     fmu_report.figure(tag, "scene_seconds", float(s["scene"]["seconds"]))
     fmu_report.figure(tag, "cycles_seconds", float(s["cycles"]["seconds"]), f"{s['cycles']['messages']} log messages")
     fmu_report.figure(tag, "threads_sequential_seconds", float(s["threads"]["sequential_seconds"]))
@@ -155,6 +167,26 @@ def test_host_matches_cli(native, beam_body, fmu_report):
         fmu_report.figure("c_host vs CLI", f"max|host-CLI|_{q}", d, f"K = {d / scale:.1f} (bound {K_TOL:g}) rtol*max|y|")
         if d > K_TOL * scale:
             failures.append(f"{q}: |host - CLI| = {d:.3e} > {K_TOL:g} * rtol * max|y| = {K_TOL * scale:.3e}")
+    assert not failures, "\n".join(failures)
+
+
+def test_host_model_exchange_matches_cli(native, beam_body, fmu_report):
+    """The host's RK4 (0.5 ms) on the Model Exchange equations, through the law's time event, against
+    the CLI's co-simulation equations at rtol 1e-11 on the same grid: within ME_TOL."""
+    proc, seconds, traj = native
+    me = traj.with_name("paper_me.csv")
+    if proc.returncode != 0 or not me.is_file():
+        pytest.fail("the native host run failed (see test_native_host_passes)\n" + host_failure(proc, seconds),
+                    pytrace=False)
+    h = read_trajectory(me)
+    c = cli(beam_body, dt_out=H, rtol=1e-11, atol=1e-13)
+    assert np.max(np.abs(h["t"] - c["t"])) <= 1e-12, "the host's and the CLI's grids differ"
+    failures = []
+    for q in ("v1", "theta1", "u2"):
+        d = float(np.max(np.abs(h[q] - c[q])))
+        fmu_report.figure("c_host Model Exchange vs CLI", f"max|host-CLI|_{q}", d, "RK4 h = 0.5 ms, CLI rtol 1e-11")
+        if not d <= ME_TOL:
+            failures.append(f"{q}: |host - CLI| = {d:.3e} > {ME_TOL:g}")
     assert not failures, "\n".join(failures)
 
 
