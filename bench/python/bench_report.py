@@ -56,7 +56,7 @@ LEVELS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 TARGET_CVODE_RATIO = 2.0
 TARGET_OVERHEAD_NS = 120.0
 KNOWN_SOLVERS = ("bdf", "bdf-fixed", "cvode", "ida", "diffsol", "scipy-bdf", "scipy-radau",
-                 "scipy-lsoda", "fmu")
+                 "scipy-lsoda", "fmu", "cvode-me", "fmpy-me")
 WP_HEADER = ("solver,scene,rtol,error,max_error,time_s,time_min_s,steps,rejected,rhs_evals,"
              "jac_evals,lu_factorizations").split(",")
 COUNTERS = ("steps", "rejected", "rhs_evals", "jac_evals", "lu_factorizations", "newton_iters")

@@ -1,5 +1,6 @@
 """SciPy solvers of the work-precision benchmark: `scipy-bdf`, `scipy-radau`, `scipy-lsoda`
-(scipy.integrate.solve_ivp methods 'BDF', 'Radau', 'LSODA') on a NumPy right-hand side.
+(scipy.integrate.solve_ivp methods 'BDF', 'Radau', 'LSODA') on a NumPy right-hand side; and
+`fmpy-me`, FMPy's CVode on the FMU's Model Exchange (`solve_fmpy`), the other Python solver.
 
     python bench/python/bench_scipy.py --round K [--cases target/bench/cases.csv] [--dir target/bench]
                                        [--max-seconds 120]
@@ -60,6 +61,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_common as bc  # noqa: E402
 
 METHODS = {"scipy-bdf": "BDF", "scipy-radau": "Radau", "scipy-lsoda": "LSODA"}
+#: A host's integrator on the FMU's Model Exchange: FMPy's simulate_fmu with its CVode (BDF, the
+#: default), on the packaged FMU that `cargo xtask bench` extracts to <dir>/fmu/BeamBody.
+HOSTS = {"fmpy-me": "CVode"}
 
 
 class Timeout(Exception):
@@ -197,6 +201,31 @@ def solve_case(prob: Problem, method: str, rtol: float, max_seconds: float):
     return elapsed, Y, counters
 
 
+def solve_fmpy(prob: Problem, rtol: float, fmu_dir: Path, model_description):
+    """FMPy's CVode on the FMU's Model Exchange (the paper's scene: its defaults, phi from the law),
+    output every grid step. FMPy sets atol = rtol * nominal (1 for every state), handles the law's
+    time event at t_rot, and records two rows there (before and after the event): the second is kept.
+    FMPy reports no counters. time_s is the whole simulate_fmu call, as a user pays it (instantiation,
+    initialisation and the Python callbacks of its CVode included; the library was loaded once
+    before the timing)."""
+    import fmpy
+
+    if prob.scene != "paper":
+        raise ValueError(f"fmpy-me runs the paper's scene (the FMU's defaults), not {prob.scene}")
+    start = time.perf_counter()
+    r = fmpy.simulate_fmu(str(fmu_dir), model_description=model_description, fmi_type="ModelExchange",
+                          start_values={"phi_source": 2}, relative_tolerance=rtol,
+                          output_interval=bc.GRID_DT, stop_time=prob.t_end, output=list(prob.names),
+                          validate=False)
+    t = r["time"]
+    keep = np.r_[t[1:] != t[:-1], True]
+    Y = np.column_stack([np.interp(prob.grid, t[keep], r[n][keep]) for n in prob.names])
+    elapsed = time.perf_counter() - start
+    if not np.isclose(t[-1], prob.t_end) or not np.all(np.isfinite(Y)):
+        raise RuntimeError(f"FMPy's run ended at t = {t[-1]}")
+    return elapsed, Y, {}
+
+
 # --------------------------------------------------------------------------------------------------
 # driver
 # --------------------------------------------------------------------------------------------------
@@ -231,7 +260,7 @@ def main(argv=None):
     out_dir = args.dir
     cases_path = args.cases or out_dir / "cases.csv"
     raw_path = out_dir / "raw.csv"
-    cases = [c for c in bc.read_cases(cases_path) if c["solver"] in METHODS]
+    cases = [c for c in bc.read_cases(cases_path) if c["solver"] in METHODS or c["solver"] in HOSTS]
     random.Random(args.round).shuffle(cases)
     skip = earlier_timeouts(raw_path, args.round)
 
@@ -241,6 +270,15 @@ def main(argv=None):
         if c["scene"] in bc.SCENES and c["scene"] not in problems:
             problems[c["scene"]] = Problem(c["scene"])
     import scipy.integrate  # noqa: F401  (imported before any timing)
+
+    fmu_dir, model_description = out_dir / "fmu" / "BeamBody", None
+    if any(c["solver"] in HOSTS for c in cases):
+        import fmpy  # noqa: F401  (imported, the FMU read and its library loaded before any timing)
+        from fmpy.fmi2 import FMU2Model
+
+        model_description = fmpy.read_model_description(str(fmu_dir), validate=False)
+        FMU2Model(guid=model_description.guid, unzipDirectory=str(fmu_dir), modelIdentifier="BeamBody",
+                  instanceName="warm-up")
 
     print(
         f"bench_scipy: round {args.round}: {len(cases)} cases, setup {time.perf_counter() - t_setup:.1f} s",
@@ -261,7 +299,10 @@ def main(argv=None):
             row["status"] = "skipped-after-timeout"
         else:
             try:
-                elapsed, Y, cnt = solve_case(problems[scene], METHODS[solver], rtol, args.max_seconds)
+                if solver in HOSTS:
+                    elapsed, Y, cnt = solve_fmpy(problems[scene], rtol, fmu_dir, model_description)
+                else:
+                    elapsed, Y, cnt = solve_case(problems[scene], METHODS[solver], rtol, args.max_seconds)
             except Timeout:
                 row["status"] = "timeout"
             except Exception as exc:  # a failed case is a row, not a crash
@@ -269,10 +310,10 @@ def main(argv=None):
             else:
                 row.update(
                     time_s=repr(elapsed),
-                    steps=cnt["steps"],
-                    rhs_evals=cnt["rhs_evals"],
-                    jac_evals=cnt["jac_evals"],
-                    lu_factorizations=cnt["lu_factorizations"],
+                    steps=cnt.get("steps", ""),
+                    rhs_evals=cnt.get("rhs_evals", ""),
+                    jac_evals=cnt.get("jac_evals", ""),
+                    lu_factorizations=cnt.get("lu_factorizations", ""),
                     status="ok",
                 )
                 if args.round == 0:
@@ -285,8 +326,8 @@ def main(argv=None):
                     )
                 print(
                     f"  {solver:12s} {scene:21s} rtol={c['rtol']:8s} {elapsed:8.3f} s "
-                    f"steps={cnt['steps']} rhs={cnt['rhs_evals']} (scipy nfev {cnt['scipy_nfev']}) "
-                    f"jac={cnt['jac_evals']} lu={cnt['lu_factorizations']}",
+                    f"steps={cnt.get('steps')} rhs={cnt.get('rhs_evals')} (scipy nfev {cnt.get('scipy_nfev')}) "
+                    f"jac={cnt.get('jac_evals')} lu={cnt.get('lu_factorizations')}",
                     file=sys.stderr,
                 )
         if row.get("status") != "ok":

@@ -1,14 +1,16 @@
 //! Random sequences of fmi2 calls, with random arguments, through the safe `Instance` API
-//! that the C functions forward to. Checks the properties of `beam_body_fuzz` after every
-//! call, and that a successful fmi2DoStep lands exactly on tc + h in stepComplete.
+//! that the C functions forward to, on a co-simulation or a Model Exchange instance (the
+//! first byte). Checks the properties of `beam_body_fuzz` after every call, that a successful
+//! fmi2DoStep lands exactly on tc + h in stepComplete, and that Model Exchange's derivatives
+//! and event indicators are finite when they are given.
 #![no_main]
 
 use beam_body::fmi::{
-    State, Status, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_TERMINATED,
+    Interface, State, Status, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_TERMINATED,
 };
 use beam_body::fmi2::{Core, Instance};
 use beam_body::fmu::variables::LOG_CATEGORIES;
-use beam_body_fuzz::{check_outputs, check_status, instance, Records};
+use beam_body_fuzz::{check_outputs, check_status, instance_of, Records};
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
 
@@ -84,6 +86,20 @@ enum Op {
     BooleanStatus(i8),
     OutputDerivatives(Vec<(u8, i8)>),
     DirectionalDerivative,
+    // Model Exchange.
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime(Num),
+    /// The length is the host's nx (the model's is 4).
+    SetContinuousStates(Vec<Num>),
+    GetContinuousStates(u8),
+    GetDerivatives(u8),
+    GetEventIndicators(u8),
+    GetNominals(u8),
+    /// Unknowns, knowns with their seeds.
+    DirectionalDerivativeMe(Vec<u8>, Vec<(u8, Num)>),
 }
 
 const SLOTS: usize = 4;
@@ -97,7 +113,7 @@ struct Harness {
 }
 
 fn vrs(list: &[u8]) -> Vec<u32> {
-    list.iter().map(|v| u32::from(*v) % 40).collect()
+    list.iter().map(|v| u32::from(*v) % 60).collect()
 }
 
 impl Harness {
@@ -130,17 +146,17 @@ impl Harness {
                 ("fmi2Reset", s)
             }
             Op::SetReal(pairs) => {
-                let vr: Vec<u32> = pairs.iter().map(|(v, _)| u32::from(*v) % 40).collect();
+                let vr: Vec<u32> = pairs.iter().map(|(v, _)| u32::from(*v) % 60).collect();
                 let x: Vec<f64> = pairs.iter().map(|(_, n)| n.value()).collect();
                 ("fmi2SetReal", inst.set_real(&vr, &x))
             }
             Op::SetInteger(pairs) => {
-                let vr: Vec<u32> = pairs.iter().map(|(v, _)| u32::from(*v) % 40).collect();
+                let vr: Vec<u32> = pairs.iter().map(|(v, _)| u32::from(*v) % 60).collect();
                 let x: Vec<i32> = pairs.iter().map(|(_, n)| *n).collect();
                 ("fmi2SetInteger", inst.set_integer(&vr, &x))
             }
             Op::SetBoolean(pairs) => {
-                let vr: Vec<u32> = pairs.iter().map(|(v, _)| u32::from(*v) % 40).collect();
+                let vr: Vec<u32> = pairs.iter().map(|(v, _)| u32::from(*v) % 60).collect();
                 let x: Vec<bool> = pairs.iter().map(|(_, b)| *b).collect();
                 ("fmi2SetBoolean", inst.set_boolean(&vr, &x))
             }
@@ -157,7 +173,7 @@ impl Harness {
             Op::GetString(list) => ("fmi2GetString", inst.get_string(&vrs(list))),
             Op::SetString(list) => ("fmi2SetString", inst.set_string(&vrs(list))),
             Op::SetInputDerivatives(list) => {
-                let vr: Vec<u32> = list.iter().map(|(v, _, _)| u32::from(*v) % 40).collect();
+                let vr: Vec<u32> = list.iter().map(|(v, _, _)| u32::from(*v) % 60).collect();
                 let order: Vec<i32> = list.iter().map(|(_, o, _)| i32::from(*o)).collect();
                 let x: Vec<f64> = list.iter().map(|(_, _, n)| n.value()).collect();
                 ("fmi2SetRealInputDerivatives", inst.set_real_input_derivatives(&vr, &order, &x))
@@ -248,7 +264,7 @@ impl Harness {
                 ("fmi2GetBooleanStatus", inst.get_boolean_status(kind).err().unwrap_or(Status::Ok))
             }
             Op::OutputDerivatives(list) => {
-                let vr: Vec<u32> = list.iter().map(|(v, _)| u32::from(*v) % 40).collect();
+                let vr: Vec<u32> = list.iter().map(|(v, _)| u32::from(*v) % 60).collect();
                 let order: Vec<i32> = list.iter().map(|(_, o)| i32::from(*o)).collect();
                 let mut out = vec![0.0; vr.len()];
                 let status = inst.get_real_output_derivatives(&vr, &order, &mut out);
@@ -257,19 +273,87 @@ impl Harness {
                 }
                 ("fmi2GetRealOutputDerivatives", status)
             }
-            Op::DirectionalDerivative => {
-                ("fmi2GetDirectionalDerivative", inst.get_directional_derivative())
+            Op::DirectionalDerivative => match inst.interface() {
+                Interface::CoSimulation => {
+                    ("fmi2GetDirectionalDerivative", inst.get_directional_derivative())
+                }
+                Interface::ModelExchange => {
+                    let vr = [20, 21];
+                    let mut out = [0.0; 2];
+                    let s = inst.get_directional_derivative_exchange(&vr, &[19], &[1.0], &mut out);
+                    ("fmi2GetDirectionalDerivative", s)
+                }
+            },
+            Op::EnterEventMode => ("fmi2EnterEventMode", inst.enter_event_mode()),
+            Op::NewDiscreteStates => match inst.new_discrete_states() {
+                Ok((info, s)) => {
+                    if let Some(t) = info.next_event_time {
+                        assert!(t.is_finite(), "nextEventTime {t}");
+                    }
+                    ("fmi2NewDiscreteStates", s)
+                }
+                Err(s) => ("fmi2NewDiscreteStates", s),
+            },
+            Op::EnterContinuousTimeMode => {
+                ("fmi2EnterContinuousTimeMode", inst.enter_continuous_time_mode())
+            }
+            Op::CompletedIntegratorStep => (
+                "fmi2CompletedIntegratorStep",
+                inst.completed_integrator_step().map_or_else(|s| s, |(_, s)| s),
+            ),
+            Op::SetTime(t) => ("fmi2SetTime", inst.set_time(t.value())),
+            Op::SetContinuousStates(x) => {
+                let x: Vec<f64> = x.iter().map(|n| n.value()).collect();
+                ("fmi2SetContinuousStates", inst.set_continuous_states(&x))
+            }
+            Op::GetContinuousStates(n) => {
+                let mut x = vec![0.0; usize::from(*n % 8)];
+                let s = inst.get_continuous_states(&mut x);
+                if s == Status::Ok {
+                    assert!(x.iter().all(|v| v.is_finite()), "non-finite states {x:?}");
+                }
+                ("fmi2GetContinuousStates", s)
+            }
+            Op::GetDerivatives(n) => {
+                let mut dx = vec![0.0; usize::from(*n % 8)];
+                let s = inst.get_derivatives(&mut dx);
+                if s == Status::Ok {
+                    assert!(dx.iter().all(|v| v.is_finite()), "non-finite derivatives {dx:?}");
+                }
+                ("fmi2GetDerivatives", s)
+            }
+            Op::GetEventIndicators(n) => {
+                let mut z = vec![0.0; usize::from(*n % 8)];
+                let s = inst.get_event_indicators(&mut z);
+                if s == Status::Ok {
+                    assert!(z.iter().all(|v| !v.is_nan()), "NaN event indicators {z:?}");
+                }
+                ("fmi2GetEventIndicators", s)
+            }
+            Op::GetNominals(n) => {
+                let mut x = vec![0.0; usize::from(*n % 8)];
+                ("fmi2GetNominalsOfContinuousStates", inst.get_nominals(&mut x))
+            }
+            Op::DirectionalDerivativeMe(unknowns, knowns) => {
+                let u = vrs(unknowns);
+                let k: Vec<u32> = knowns.iter().map(|(v, _)| u32::from(*v) % 60).collect();
+                let seed: Vec<f64> = knowns.iter().map(|(_, n)| n.value()).collect();
+                let mut out = vec![0.0; u.len()];
+                let s = inst.get_directional_derivative_exchange(&u, &k, &seed, &mut out);
+                ("fmi2GetDirectionalDerivative", s)
             }
         }
     }
 }
 
-fuzz_target!(|ops: Vec<Op>| {
+fuzz_target!(|input: (bool, Vec<Op>)| {
+    let (exchange, ops) = input;
     // FUZZ_DEBUG=1 prints the calls (to read a failing input: run the target on it).
     if std::env::var_os("FUZZ_DEBUG").is_some() {
-        eprintln!("{ops:#?}");
+        eprintln!("Model Exchange: {exchange}\n{ops:#?}");
     }
-    let (inst, records) = instance(false);
+    let interface = if exchange { Interface::ModelExchange } else { Interface::CoSimulation };
+    let (inst, records) = instance_of(interface, false);
     let mut h = Harness { inst, records, slots: Default::default(), time: 0.0 };
     for op in ops.iter().take(64) {
         h.call(op);

@@ -8,7 +8,7 @@
 #![no_main]
 
 use beam_body::fmi::{State, Status, STATUS_LAST_SUCCESSFUL_TIME};
-use beam_body_fuzz::{check_outputs, check_status, instance, reseal};
+use beam_body_fuzz::{check_outputs, check_status, instance, instance_of, reseal};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|input: &[u8]| {
@@ -42,8 +42,24 @@ fuzz_target!(|input: &[u8]| {
             show(&again)
         );
     }
+    // A state restores into an instance of its own interface.
+    let (mut inst, records) = instance_of(core.interface(), false);
     assert_eq!(inst.set_state(&core), Status::Ok);
     check_outputs(&mut inst, &records);
+    // Model Exchange: the derivatives are finite or refused with a reason, and a completed
+    // step ends cleanly.
+    if inst.state() == State::ContinuousTimeMode {
+        let before = records.borrow().len();
+        let mut dx = [0.0; 4];
+        let status = inst.get_derivatives(&mut dx);
+        check_status("fmi2GetDerivatives", status, &records, before);
+        if status == Status::Ok {
+            assert!(dx.iter().all(|x| x.is_finite()), "non-finite derivatives {dx:?}");
+        }
+        let before = records.borrow().len();
+        let status = inst.completed_integrator_step().err().unwrap_or(Status::Ok);
+        check_status("fmi2CompletedIntegratorStep", status, &records, before);
+    }
     // Step on from the restored state: whatever it holds, the step must end cleanly.
     if inst.state() == State::StepComplete {
         let tc = inst.get_real_status(STATUS_LAST_SUCCESSFUL_TIME).expect("allowed");

@@ -11,8 +11,8 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
-use beam_body::fmi::{State, Status};
-use beam_body::fmi2::types::FMI2_COSIMULATION;
+use beam_body::fmi::{Interface, State, Status};
+use beam_body::fmi2::types::{FMI2_COSIMULATION, FMI2_MODEL_EXCHANGE};
 use beam_body::fmi2::{instantiate, Instance};
 use beam_body::fmu::variables::{guid, BaseType, VARIABLES};
 
@@ -21,13 +21,22 @@ pub type Records = Rc<RefCell<Vec<(Status, String, String)>>>;
 
 /// A co-simulation instance with a recording logger.
 pub fn instance(logging_on: bool) -> (Instance, Records) {
+    instance_of(Interface::CoSimulation, logging_on)
+}
+
+/// An instance of `interface` with a recording logger.
+pub fn instance_of(interface: Interface, logging_on: bool) -> (Instance, Records) {
+    let fmu_type = match interface {
+        Interface::CoSimulation => FMI2_COSIMULATION,
+        Interface::ModelExchange => FMI2_MODEL_EXCHANGE,
+    };
     let records: Records = Rc::default();
     let sink = records.clone();
     let logger = Box::new(move |status: Status, category: &str, message: &str| {
         sink.borrow_mut().push((status, category.to_string(), message.to_string()));
     });
-    let inst = instantiate("fuzz", FMI2_COSIMULATION, guid(), logger, logging_on)
-        .expect("a valid instantiation");
+    let inst =
+        instantiate("fuzz", fmu_type, guid(), logger, logging_on).expect("a valid instantiation");
     (inst, records)
 }
 
@@ -51,6 +60,8 @@ fn readable(state: State) -> bool {
             | State::StepFailed
             | State::Terminated
             | State::Error
+            | State::EventMode
+            | State::ContinuousTimeMode
     )
 }
 

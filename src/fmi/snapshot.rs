@@ -39,6 +39,18 @@ pub struct Snapshot<M> {
     pub(crate) model: M,
 }
 
+impl<M> Snapshot<M> {
+    /// The interface of the instance that made it.
+    pub fn interface(&self) -> Interface {
+        self.interface
+    }
+
+    /// The state of the instance it holds.
+    pub fn state(&self) -> State {
+        self.state
+    }
+}
+
 impl<M: Model> Snapshot<M> {
     pub(crate) fn new(interface: Interface) -> Snapshot<M> {
         Snapshot {

@@ -20,7 +20,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use beam_body::fmi::{Logger, Status};
-use beam_body::fmi2::types::FMI2_COSIMULATION;
+use beam_body::fmi2::types::{FMI2_COSIMULATION, FMI2_MODEL_EXCHANGE};
 use beam_body::fmi2::{instantiate, Instance};
 use beam_body::fmu::variables::{guid, Var};
 
@@ -203,14 +203,16 @@ fn run_target(bin: &Path, target: &'static str, seconds: u64) -> Result<Outcome>
 
 /// Writes serialized FMU states of this build's format into `dir`: the deserializer's
 /// seeds, one per state of the state machine that has a distinct shape (no integrator yet,
-/// the law, the input with derivatives, the DAE, a failed step, terminated).
+/// the law, the input with derivatives, the DAE, a failed step, terminated; Model Exchange in
+/// event mode, in continuous-time mode after the law's event, terminated).
 fn write_state_seeds(dir: &Path) -> Result {
     let mut seeds: Vec<Vec<u8>> = Vec::new();
     let quiet = || -> Logger { Box::new(|_, _, _| {}) };
-    let new = || {
-        instantiate("seed", FMI2_COSIMULATION, guid(), quiet(), false)
+    let new_of = |fmu_type| {
+        instantiate("seed", fmu_type, guid(), quiet(), false)
             .ok_or("cannot instantiate the FMU in-process")
     };
+    let new = || new_of(FMI2_COSIMULATION);
     let snapshot = |inst: &mut Instance| -> Result<Vec<u8>> {
         let core = inst.get_state().map_err(|s| format!("fmi2GetFMUstate: {s:?}"))?;
         inst.serialize(&core).map_err(|s| format!("fmi2SerializeFMUstate: {s:?}").into())
@@ -253,6 +255,21 @@ fn write_state_seeds(dir: &Path) -> Result {
     if inst.do_step(0.1, 0.01) != Status::Discard {
         return Err("seed: a jump of φ by 1e3 rad was not discarded".into());
     }
+    seeds.push(snapshot(&mut inst)?);
+    // Model Exchange with the law: event mode at the start, continuous-time mode after the
+    // law's event at t_rot = 0.85 s, terminated.
+    let mut inst = new_of(FMI2_MODEL_EXCHANGE)?;
+    ok("phi_source", inst.set_integer(&[Var::PhiSource.vr()], &[2]))?;
+    ok("enter", inst.enter_initialization_mode())?;
+    ok("exit", inst.exit_initialization_mode())?;
+    seeds.push(snapshot(&mut inst)?);
+    inst.new_discrete_states().map_err(|s| format!("seed: fmi2NewDiscreteStates: {s:?}"))?;
+    ok("time", inst.set_time(0.85))?;
+    inst.new_discrete_states().map_err(|s| format!("seed: fmi2NewDiscreteStates: {s:?}"))?;
+    ok("continuous", inst.enter_continuous_time_mode())?;
+    ok("states", inst.set_continuous_states(&[0.3, 0.2, -1.0, 0.5]))?;
+    seeds.push(snapshot(&mut inst)?);
+    ok("terminate", inst.terminate())?;
     seeds.push(snapshot(&mut inst)?);
     // The target's first byte is its mode (odd: reseal the frame after mutation).
     for (k, bytes) in seeds.iter().enumerate() {

@@ -21,10 +21,11 @@ use std::sync::{Mutex, Once};
 
 use fmi::fmi2::binding::Fmi2Binding;
 use fmi::fmi2::import::Fmi2Import;
-pub use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
+pub use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS, InstanceME, ModelExchange};
 pub use fmi::fmi2::Fmi2Error;
 use fmi::fmi2::{Fmi2Res, Fmi2Status};
 use fmi::traits::{FmiImport, FmiStatus};
+pub use fmi::EventFlags;
 
 use crate::{relative, Result};
 
@@ -74,14 +75,22 @@ impl Fmu2 {
     /// calloc/free and the `resources` URI; not visible.
     pub fn instantiate(&self, name: &str, logging_on: bool) -> Result<InstanceCS> {
         take_messages();
-        self.import.instantiate_cs(name, false, logging_on).map_err(|err| {
-            let text = match err {
-                fmi::Error::Instantiation => "fmi2Instantiate returned NULL".to_string(),
-                err => format!("fmi2Instantiate: {err}"),
-            };
-            with_messages(text).into()
-        })
+        self.import.instantiate_cs(name, false, logging_on).map_err(instantiation_error)
     }
+
+    /// [`instantiate`](Self::instantiate) as Model Exchange.
+    pub fn instantiate_me(&self, name: &str, logging_on: bool) -> Result<InstanceME> {
+        take_messages();
+        self.import.instantiate_me(name, false, logging_on).map_err(instantiation_error)
+    }
+}
+
+fn instantiation_error(err: fmi::Error) -> Box<dyn std::error::Error> {
+    let text = match err {
+        fmi::Error::Instantiation => "fmi2Instantiate returned NULL".to_string(),
+        err => format!("fmi2Instantiate: {err}"),
+    };
+    with_messages(text).into()
 }
 
 /// What a call returned, as xtask's `Result`.

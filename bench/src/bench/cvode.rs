@@ -318,6 +318,21 @@ pub fn run_with(problem: &Problem, rtol: f64, options: Options) -> Result<Outcom
     with_system_in(&problem.scene, &model, order, Cvode { api, problem, rtol, options })
 }
 
+/// [`run`] on a system of the caller's (a host's view of an FMU: [`super::me`]), whose
+/// `system(piece)` is called at the start and on the law's breakpoint.
+pub fn run_system<S, F, const N: usize>(
+    problem: &Problem,
+    rtol: f64,
+    system: F,
+    y0: SVector<f64, N>,
+) -> Result<Outcome, String>
+where
+    S: OdeSystem<Const<N>> + Copy,
+    F: Fn(PhiPiece) -> S,
+{
+    solve(api()?, problem, rtol, Options::default(), system, y0)
+}
+
 /// [`solve`] with its arguments, for [`with_system_in`].
 struct Cvode<'a> {
     api: &'a Api,

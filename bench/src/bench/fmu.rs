@@ -59,7 +59,7 @@ pub fn run(
 }
 
 /// Sets the scene's formulation, φ source (`"law"` or `"input"`), model parameters and law.
-pub fn set_scene(instance: &mut InstanceCS, scene: &Scene, phi_source: &str) -> Result {
+pub fn set_scene(instance: &mut impl Common, scene: &Scene, phi_source: &str) -> Result {
     let source = item(PHI_SOURCE_TYPE.items, phi_source)?;
     let formulation = item(FORMULATION_TYPE.items, &scene.formulation.name().replace('-', "_"))?;
     let vrs = [Var::PhiSource.vr(), Var::Formulation.vr()];

@@ -31,6 +31,7 @@ mod diffsol;
 mod dostep;
 pub mod elements;
 pub mod fmu;
+mod me;
 mod ours;
 pub mod problem;
 mod sundials_build;
@@ -52,9 +53,11 @@ use crate::{cargo, project_root, python, relative, run_cmd, target_dir, write_te
 use problem::{state_names, Counters, Outcome, Problem, SCENES};
 
 /// The solvers that `bench-run` runs in-process.
-const RUST_SOLVERS: [&str; 5] = ["bdf", "bdf-fixed", "fmu", "cvode", "diffsol"];
+const RUST_SOLVERS: [&str; 6] = ["bdf", "bdf-fixed", "fmu", "cvode", "cvode-me", "diffsol"];
 /// The solvers of `bench/python/bench_scipy.py`.
 const SCIPY_SOLVERS: [&str; 3] = ["scipy-bdf", "scipy-radau", "scipy-lsoda"];
+/// FMPy's CVode on the FMU's Model Exchange, which `bench_scipy.py` runs too (paper only).
+const FMPY_ME: &str = "fmpy-me";
 
 const CASES_HEADER: &str = "solver,scene,rtol,h";
 const RAW_HEADER: &str = "round,solver,scene,rtol,h,time_s,steps,rejected,rhs_evals,jac_evals,\
@@ -119,8 +122,9 @@ impl Case {
         RUST_SOLVERS.contains(&self.solver.as_str())
     }
 
+    /// A case of `bench_scipy.py`: SciPy's solvers and FMPy's.
     fn is_scipy(&self) -> bool {
-        SCIPY_SOLVERS.contains(&self.solver.as_str())
+        SCIPY_SOLVERS.contains(&self.solver.as_str()) || self.solver == FMPY_ME
     }
 
     /// `sol/<solver>__<scene>__<rtol>__<h>.csv`, `-` for an empty field.
@@ -205,6 +209,8 @@ fn cases(mode: Mode) -> Vec<Case> {
         }
         if scene == "paper" {
             list.extend(fmu.iter().map(|(rtol, h)| Case::new("fmu", scene, rtol, h)));
+            list.extend(tight.iter().map(|rtol| Case::new("cvode-me", scene, rtol, "")));
+            list.extend(scipy.iter().map(|rtol| Case::new(FMPY_ME, scene, rtol, "")));
         }
         let scipy = if scene == "stiff" { &scipy_stiff } else { &scipy };
         for solver in SCIPY_SOLVERS {
@@ -465,7 +471,7 @@ pub fn run_round(round: u64) -> Result {
     for case in &cases {
         problems.entry(case.scene.clone()).or_insert_with(|| problem::problem(&case.scene));
     }
-    let fmu = if cases.iter().any(|c| c.solver == "fmu") {
+    let fmu = if cases.iter().any(|c| c.solver == "fmu" || c.solver == "cvode-me") {
         Some(fmu::load(&fmu::extracted_dir()))
     } else {
         None
@@ -570,6 +576,11 @@ fn timed_solve(
             None => Err("the FMU was not loaded".into()),
         },
         "cvode" => rtol().and_then(|rtol| cvode::run(problem, rtol)),
+        "cvode-me" => match fmu {
+            Some(Ok(fmu)) => rtol().and_then(|rtol| me::run(fmu, problem, rtol)),
+            Some(Err(err)) => Err(err.clone()),
+            None => Err("the FMU was not loaded".into()),
+        },
         "diffsol" => rtol().and_then(|rtol| diffsol::run(problem, rtol)),
         other => Err(format!("unknown solver `{other}`")),
     };
@@ -821,6 +832,9 @@ mod tests {
         let quick = cases(Mode::Quick);
         assert_eq!(quick.iter().filter(|c| c.solver == "bdf").count(), 12);
         assert_eq!(quick.iter().filter(|c| c.solver == "fmu").count(), 2);
+        assert_eq!(quick.iter().filter(|c| c.solver == "cvode-me").count(), 3);
+        assert_eq!(quick.iter().filter(|c| c.solver == FMPY_ME).count(), 2);
+        assert!(quick.iter().filter(|c| c.solver.ends_with("-me")).all(|c| c.scene == "paper"));
         let full = cases(Mode::Full);
         assert_eq!(full.iter().filter(|c| c.solver == "bdf").count(), 92);
         assert_eq!(full.iter().filter(|c| c.solver == "scipy-radau").count(), 36);
