@@ -18,6 +18,7 @@ pub mod study;
 pub mod summary;
 pub mod system;
 pub mod test;
+pub mod tools;
 pub mod xml;
 
 use std::env;

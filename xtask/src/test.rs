@@ -40,6 +40,7 @@ pub fn run(scope: Scope) -> Result {
     let python = report.step("python venv", python::ensure_venv);
     let binary = report.step("build beam-body (release)", build_release_binary);
     let fmu = report.step("package the FMUs (all platforms)", || crate::fmu::build_package(true));
+    let fmi_sim = report.step("fmi-sim (rust-fmi's host)", crate::tools::ensure_fmi_sim);
     if scope == Scope::All {
         report.step("rust tests", rust_tests);
         report.step("rust tests (aarch64, qemu)", crate::platforms::test_linux_aarch64);
@@ -51,7 +52,7 @@ pub fn run(scope: Scope) -> Result {
     }
     match (python, binary, fmu) {
         (Some(python), Some(binary), Some(fmu)) => {
-            report.step("python tests", || pytest(&python, &binary, &fmu));
+            report.step("python tests", || pytest(&python, &binary, &fmu, fmi_sim.as_deref()));
         }
         _ => report.skip("python tests", "needs the venv, the release binary and the FMU"),
     }
@@ -83,7 +84,7 @@ fn nextest_available() -> bool {
         .is_ok_and(|status| status.success())
 }
 
-fn pytest(python: &Path, binary: &Path, fmu: &Packages) -> Result {
+fn pytest(python: &Path, binary: &Path, fmu: &Packages, fmi_sim: Option<&Path>) -> Result {
     let root = project_root();
     let mut cmd = Command::new(python);
     cmd.args(["-m", "pytest", "tests/python", "-q", "-ra"])
@@ -91,6 +92,7 @@ fn pytest(python: &Path, binary: &Path, fmu: &Packages) -> Result {
         .env("BEAM_BODY_FMU", &fmu.main)
         .env("BEAM_BODY_ROOT", &root)
         .envs(fmu.aarch64_linux.iter().map(|p| ("BEAM_BODY_FMU_AARCH64_LINUX", p)))
+        .envs(fmi_sim.map(|p| ("BEAM_BODY_FMI_SIM", p)))
         .current_dir(&root);
     let status = status_of(&mut cmd)?;
     match status.code() {
