@@ -7,9 +7,11 @@ on this x86-64 Linux machine and run under emulation, and bit-identity across th
   -L /usr/aarch64-linux-gnu) on binaries/aarch64-linux/BeamBody.so;
 - linux64: the native host (conftest's `host_exe`) on binaries/linux64/BeamBody.so, the reference.
 
-On win64 and aarch64-linux the host runs its three checks with the full counts (the paper's scene,
-1000 instantiate/free cycles, 8 threads bit-identical to a serial run; test_c_host.py runs them
-natively), and saves the FMU state after communication step K_SAVE of the scene. Then, bit for bit:
+On win64 and aarch64-linux the host runs its four checks with the full counts (the paper's scene,
+1000 instantiate/free cycles, 8 threads bit-identical to a serial run, Model Exchange under its own
+RK4; test_c_host.py runs them natively), and saves the FMU state after communication step K_SAVE of
+the scene. Then, bit for bit:
+- the Model Exchange trajectory on each emulated platform equals the native one;
 - the scene's trajectory (v1, theta1, u2 at the 1021 communication points) on each platform equals
   the native one (a native run without --save-state: saving a state must not disturb the run);
 - the serialized FMU state at step K_SAVE is the same bytes on all three platforms;
@@ -215,7 +217,7 @@ class Runs:
             traj, state = self.tmp / f"{name}.csv", self.tmp / f"{name}-state-{K_SAVE}.bin"
             counts = [0, 0] if name == "linux64" else [CYCLES, THREADS]
             proc, seconds = p.run(self.unzipdir, "--cycles", counts[0], "--threads", counts[1],
-                                  "--save-state", K_SAVE, state, "-o", traj)
+                                  "--save-state", K_SAVE, state, "-o", traj, "--me-out", me_trajectory(traj))
             return Run(proc, seconds, traj, state)
         return self._once(("main", name), make)
 
@@ -232,6 +234,11 @@ class Runs:
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory, fmu_unzipdir) -> Runs:
     return Runs(tmp_path_factory.mktemp("c_host_platforms"), fmu_unzipdir)
+
+
+def me_trajectory(traj: Path) -> Path:
+    """Where a main run writes its Model Exchange trajectory (host.c's check 4, --me-out)."""
+    return traj.with_name(traj.stem + "-me.csv")
 
 
 def first_difference(a: dict, b: dict, offset: int = 0) -> str | None:
@@ -292,6 +299,9 @@ def test_host_passes_emulated(request, runs, name, fmu_report):
         str(THREADS), "1", str(THREADS)
     ), run.proc.stdout
     assert int(s["save_state"]["step"]) == K_SAVE and run.state.stat().st_size == int(s["save_state"]["bytes"])
+    assert (s["exchange"]["points"], s["exchange"]["events"], s["exchange"]["restored"]) == (
+        str(N_STEPS + 1), "1", "identical"
+    ), run.proc.stdout
     tag = f"c_host {name}"
     how = "wine64" if name == "win64" else "qemu-aarch64"
     fmu_report.figure(tag, "wall_seconds", run.seconds,
@@ -323,6 +333,18 @@ def test_trajectory_bit_identical(request, runs, name, fmu_report):
                           f"scene only, state saved at step {K_SAVE}")
         fmu_report.figure("c_host linux64", "scene_seconds", ref_run.seconds, "scene only")
     assert where is None, f"{name} vs linux64: {where}"
+
+
+@pytest.mark.parametrize("name", EMULATED)
+def test_model_exchange_bit_identical(request, runs, name, fmu_report):
+    """The host's RK4 on the Model Exchange equations (check 4) on `name` against linux64: the same
+    bits at every communication point, through the law's event."""
+    ref = read_trajectory(me_trajectory(runs.main(request, "linux64").require("the native run").traj))
+    mine = read_trajectory(me_trajectory(runs.main(request, name).require(f"the host on {name}").traj))
+    where = first_difference(mine, ref)
+    fmu_report.figure(f"c_host {name} vs linux64", "model_exchange_identical", int(where is None),
+                      f"RK4 on Model Exchange, {N_STEPS + 1} points" + (f": {where}" if where else ""))
+    assert where is None, f"Model Exchange on {name} vs linux64: {where}"
 
 
 @pytest.mark.parametrize("name", EMULATED)
