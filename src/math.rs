@@ -110,8 +110,11 @@ pub fn hypot(x: f64, y: f64) -> f64 {
 /// Whether two times are the same up to the rounding of a sum such as a host's tc + h or
 /// start + n·h: 64 ulps of the largest of |a|, |b| and `scale` (a step size, or 0). The one
 /// meaning of "the same time" for the FMI core and the driver.
+///
+/// An infinite time (a stop that is none, `f64::INFINITY`) is the same as itself only.
 pub fn same_time(a: f64, b: f64, scale: f64) -> bool {
-    (a - b).abs() <= 64.0 * f64::EPSILON * a.abs().max(b.abs()).max(scale)
+    let d = (a - b).abs();
+    a == b || d.is_finite() && d <= 64.0 * f64::EPSILON * a.abs().max(b.abs()).max(scale)
 }
 
 /// A fixed pseudo-random sequence for tests, uniform in [0, 1): a 64-bit linear congruential

@@ -41,6 +41,11 @@ pub struct BeamBodyFmu {
     pub values: Values,
     /// The integrator, from ExitInitializationMode on (co-simulation).
     pub run: Option<Run>,
+    /// The communication time (co-simulation): where the outputs are. With the law, the
+    /// integrator runs ahead of it ([`Run::step_past`]).
+    at: f64,
+    /// Where the integrator must stop: the experiment's stop time, or none (∞).
+    stop: f64,
     /// The equations a host integrates (Model Exchange), from ExitInitializationMode on, or
     /// built in initialization mode for the start state.
     pub exchange: Option<Box<exchange::Exchange>>,
@@ -75,13 +80,20 @@ impl BeamBodyFmu {
         Run::start(&scene, t0, first, MAX_STEPS_PER_DO_STEP).map_err(|e| e.to_string())
     }
 
+    /// Whether the integrator runs ahead of the communication points: with the law, whose φ
+    /// is known ahead, at an adaptive step ([`Run::step_past`]).
+    fn runs_ahead(&self) -> bool {
+        let s = &self.values.settings;
+        s.phi_source == PhiSource::Law && s.solver.fixed_step == 0.0
+    }
+
     /// The motion at the current time, computed now if it is not cached.
     fn kinematics(&mut self, setup: &Setup) -> Result<Kinematics, String> {
         if let Some(k) = self.cache.kinematics {
             return Ok(k);
         }
         let k = match (&self.run, &self.exchange) {
-            (Some(run), _) => run.kinematics_at(run.t()).map_err(|e| e.to_string())?,
+            (Some(run), _) => run.kinematics_at(self.at).map_err(|e| e.to_string())?,
             (None, Some(ex)) => ex.kinematics(&self.values),
             // Initialization mode: the outputs of the start state.
             (None, None) => {
@@ -241,6 +253,8 @@ impl fmi::Model for BeamBodyFmu {
         BeamBodyFmu {
             values: Values::from_table(),
             run: None,
+            at: 0.0,
+            stop: f64::INFINITY,
             exchange: None,
             cache: Cache::default(),
             phi: PhiNotes::default(),
@@ -290,6 +304,8 @@ impl fmi::Model for BeamBodyFmu {
                 self.values.input.dphi = None;
                 self.values.input.ddphi = None;
                 self.run = Some(run);
+                self.at = setup.start_time;
+                self.stop = setup.stop_time.unwrap_or(f64::INFINITY);
             }
             Interface::ModelExchange => {
                 self.exchange = Some(Box::new(self.build_exchange(setup)?));
@@ -320,6 +336,7 @@ impl fmi::Model for BeamBodyFmu {
             self.run =
                 Some(self.build_run(&at.setup).map_err(|e| format!("the saved parameters: {e}"))?);
         }
+        let ahead = self.runs_ahead();
         let run = self.run.as_mut().expect("built above");
         // The integrator's size, which the saved parameters fix (n_elements, formulation): a
         // state whose parameters were changed after it was written is refused here, before
@@ -337,15 +354,17 @@ impl fmi::Model for BeamBodyFmu {
         }
         run.visit_state(v);
         run.check_state()?;
-        // After every step, successful or not, the communication time and the integrator's
-        // time agree (up to the rounding of tc + h).
-        if !crate::math::same_time(run.t(), at.time, 1.0) {
-            return Err(format!(
-                "field `integrator time` = {} does not match `time` = {}",
-                run.t(),
-                at.time
-            ));
+        // After every step, successful or not, the integrator is at the communication time
+        // (up to the rounding of tc + h), or, running ahead with the law, within one of its
+        // steps after it.
+        let t = run.t();
+        let at_time = crate::math::same_time(t, at.time, 1.0);
+        if !(at_time || ahead && t > at.time && run.reaches_back_to(at.time)) {
+            let what = if ahead { "is not within one step after" } else { "does not match" };
+            return Err(format!("field `integrator time` = {t} {what} `time` = {}", at.time));
         }
+        self.at = at.time;
+        self.stop = at.setup.stop_time.unwrap_or(f64::INFINITY);
         Ok(())
     }
 }
@@ -354,17 +373,31 @@ impl fmi::CoSimulation for BeamBodyFmu {
     const MAX_OUTPUT_DERIVATIVE_ORDER: i32 = outputs::MAX_OUTPUT_DERIVATIVE_ORDER;
     const MAX_INPUT_DERIVATIVE_ORDER: i32 = 2;
 
+    /// With the law, the integrator takes its own steps, as the CLI's run does, and the
+    /// outputs at `to` come from its dense output; else it lands on `to` (a host's input is
+    /// known up to `to` only; the fixed step is the paper's one step per communication
+    /// step). A step that fails past `to` (the range left just after it) fails this
+    /// DoStep at `to`, where the outputs are complete.
     fn do_step(&mut self, from: f64, to: f64, notes: &mut Notes) -> Result<(), StepFailure> {
         self.check_phi_sent(notes);
         let sample = crate::model::Sample { t: from, ..self.values.input };
         self.values.input.dphi = None;
         self.values.input.ddphi = None;
         self.cache = Cache::default();
+        let (ahead, stop) = (self.runs_ahead(), self.stop);
         let run = self.run.as_mut().expect("a started model has a run");
-        run.set_sample(sample);
-        if let Err(e) = run.step_to(to) {
-            return Err(StepFailure { t: run.t(), message: e.to_string() });
+        let stepped = if ahead {
+            run.step_past(to, stop)
+        } else {
+            run.set_sample(sample);
+            run.step_to(to)
+        };
+        if let Err(e) = stepped {
+            let t = run.t().min(to);
+            self.at = t;
+            return Err(StepFailure { t, message: e.to_string() });
         }
+        self.at = to;
         notes.extend(run.take_warning());
         Ok(())
     }

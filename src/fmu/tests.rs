@@ -228,9 +228,9 @@ fn reactions_and_energy_are_computed_only_when_read() {
     assert!(c.kinematics.is_some() && c.reactions.is_none() && c.energy.is_none());
     assert_eq!(inst.get_real(&[Var::Moment.vr()], &mut x), Status::Ok);
     assert!(inst.core.model.cache.reactions.is_some() && inst.core.model.cache.energy.is_none());
-    // The same values as the standalone outputs.
+    // The same values as the standalone outputs at the communication time.
     let run = inst.core.model.run.as_ref().unwrap();
-    let o = run.outputs_at(run.t()).unwrap();
+    let o = run.outputs_at(inst.core.time).unwrap();
     assert_eq!(x[0], o.reactions.m);
     assert_eq!(inst.get_real(&[Var::Energy.vr()], &mut x), Status::Ok);
     assert_eq!(x[0], o.energy);

@@ -107,7 +107,7 @@ fn a_host_integrator_runs_the_law_through_its_time_event() {
     }
     assert!((me.core.time - 1.2).abs() < 1e-12);
 
-    let (mut cs, _) = instance(CS);
+    let (mut cs, cs_msgs) = instance(CS);
     assert_eq!(cs.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
     assert_eq!(cs.setup_experiment(Some(1e-10), 0.0, None), Status::Ok);
     assert_eq!(cs.enter_initialization_mode(), Status::Ok);
@@ -116,7 +116,7 @@ fn a_host_integrator_runs_the_law_through_its_time_event() {
     let vrs = [Var::V1.vr(), Var::Theta1.vr(), Var::U2.vr(), Var::Moment.vr()];
     let (mut a, mut b) = ([0.0; 4], [0.0; 4]);
     assert_eq!(me.get_real(&vrs, &mut a), Status::Ok);
-    assert_eq!(cs.get_real(&vrs, &mut b), Status::Ok);
+    assert_eq!(cs.get_real(&vrs, &mut b), Status::Ok, "{}", last(&cs_msgs));
     for k in 0..3 {
         assert!((a[k] - b[k]).abs() < 1e-8, "output {k}: ME {a:?} CS {b:?}");
     }

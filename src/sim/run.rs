@@ -293,6 +293,16 @@ impl Run {
         self.step_to_sampling(t, [], |_, _| Ok(()))
     }
 
+    /// Steps until the run reaches `t`, never past `tstop` (`f64::INFINITY`: no stop): the
+    /// integrator takes its own steps, as the CLI's run does, and its dense output
+    /// ([`kinematics_at`](Self::kinematics_at)) gives the values at `t`. A `t` inside the
+    /// last step takes no step. Only for an input known ahead: the law (with a host's input,
+    /// the piece beyond `t` is not known yet, and [`step_to`](Self::step_to) lands on `t`).
+    pub fn step_past(&mut self, t: f64, tstop: f64) -> Result<(), SimError> {
+        debug_assert!(matches!(self.input, PhiInput::Law(_)), "the law's input is known ahead");
+        self.interval(t, |run| Ok(run.advance_to(t, tstop)?))
+    }
+
     /// Steps to exactly `t`, calling `sink` at each of `times` (increasing, up to t) on the
     /// way, with the run stepped past it. With a host's input, a sample set since the last
     /// call gives the piece of φ for the whole interval to t; without one, the piece in use
@@ -521,7 +531,7 @@ impl Run {
     }
 
     /// Whether `t` is not behind the integrator's last step ([`Bdf::reaches_back_to`]).
-    fn reaches_back_to(&self, t: f64) -> bool {
+    pub fn reaches_back_to(&self, t: f64) -> bool {
         match &self.bdf {
             Integrator::TwoDof(b) => b.reaches_back_to(t),
             Integrator::Dae(b) => b.reaches_back_to(t),

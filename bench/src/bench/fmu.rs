@@ -3,10 +3,10 @@
 //! built-in law (phi_source = law), tolerance = the case's rtol (fmi2SetupExperiment), and
 //! fmi2DoStep at a constant communication step H from 0 to t_end.
 //!
-//! The FMU integrates with the same BDF as `bdf`, but lands exactly on every communication
-//! point (its stop time) and keeps its step history across them: the difference to `bdf`
-//! is the cost of the FMI layer and of the steps shortened to land. FMI reports no work
-//! counters, so they stay empty.
+//! The FMU integrates with the same BDF as `bdf` and, with the law, takes its steps: its
+//! integrator runs ahead of the communication points and the outputs come from its dense
+//! output. The difference to `bdf` is the cost of the FMI layer and of the outputs asked at
+//! every communication point. FMI reports no work counters, so they stay empty.
 
 use std::path::{Path, PathBuf};
 
