@@ -55,6 +55,8 @@ LEVELS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8)
 #: The targets of the Targets table.
 TARGET_CVODE_RATIO = 2.0
 TARGET_OVERHEAD_NS = 120.0
+#: The co-simulation FMU at H = 10 ms against the host's CVODE on its Model Exchange (issue 29).
+TARGET_CS_OVER_ME = 2.0
 KNOWN_SOLVERS = ("bdf", "bdf-fixed", "cvode", "ida", "diffsol", "scipy-bdf", "scipy-radau",
                  "scipy-lsoda", "fmu", "cvode-me", "fmpy-me")
 WP_HEADER = ("solver,scene,rtol,error,max_error,time_s,time_min_s,steps,rejected,rhs_evals,"
@@ -603,6 +605,20 @@ def markdown(cases, curves, scenes, costs, ref_texts, notes, args, date, cores):
                     r = c.time / o[1]
                     best_fixed = r if best_fixed is None else min(best_fixed, r)
                 L.append(f"| {c.label} | {c.error:.2e} | {fmt_time(c.time)} | {est_text(o)} | {rt} |")
+            L.append("")
+        # (b3b) co-simulation against a host's integrator on the Model Exchange of the same FMU
+        cs = [c for cv in sc.values() if cv.solver == "fmu" for c in cv.cases if c.h == 1e-2]
+        hosts = [(lab, sc[lab]) for lab in ("cvode-me", "fmpy-me") if lab in sc]
+        if cs and hosts:
+            L.append(f"Co-simulation at H = 10 ms against a host's integrator on the FMU's Model Exchange, "
+                     f"at the co-simulation's error (target ≥ {TARGET_CS_OVER_ME:g}×):")
+            L.append("")
+            L.append("| co-simulation case | error | its time | host | host's time at that error | ratio |")
+            L.append("|---|---|---|---|---|---|")
+            for c in sorted(cs, key=lambda c: c.error):
+                for lab, cv in hosts:
+                    L.append(f"| {c.label} rtol={c.rtol_text} | {c.error:.2e} | {fmt_time(c.time)} | {lab} | "
+                             f"{est_text(cv.at(c.error))} | {ratio_text(cv.at(c.error), ('=', c.time, None))} |")
             L.append("")
         # (b4) our cases
         mine = sorted((c for c in cases if c.scene == scene and c.solver == OURS and c.error is not None),
