@@ -104,11 +104,13 @@ impl<M: ModelExchange> Instance<M> {
     /// SetTime.
     pub fn set_time(&mut self, t: f64) -> Status {
         let r = self.exchange("SetTime", mask::EVENT_OR_CONTINUOUS).and_then(|f| {
-            // Any finite time: an integrator evaluates the equations past its output times
-            // and past stopTime (CVODE without a stop time does).
-            if !t.is_finite() {
+            // Any finite time from the start on: an integrator evaluates the equations past
+            // its output times and past stopTime (CVODE without a stop time does).
+            let start = self.core.setup.start_time;
+            if !(t.is_finite() && t >= start) {
                 return Err(FmiError::error(format!(
-                    "{f}: time = {t:?} is out of range: must be finite"
+                    "{f}: time = {t:?} is out of range: must be finite and >= startTime = \
+                     {start:?}"
                 )));
             }
             self.core.time = t;
@@ -230,6 +232,12 @@ impl<M: ModelExchange> Instance<M> {
                 .model
                 .directional_derivative(unknowns, knowns, seed, out)
                 .map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+            if let Some(k) = out.iter().position(|v| !v.is_finite()) {
+                return Err(FmiError::error(format!(
+                    "{f}: dvUnknown[{k}] = {} is not finite at this state and seed",
+                    out[k]
+                )));
+            }
             trace!(self, "{f}: unknowns {unknowns:?}, knowns {knowns:?}, seed {seed:?}: {out:?}");
             Ok(Status::Ok)
         });

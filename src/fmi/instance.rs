@@ -419,7 +419,10 @@ impl<M: Model> Instance<M> {
             FmiError::error(format!("{func}: the outputs cannot be computed: {msg}"))
         })?;
         match value {
-            Value::Real(x) if !x.is_finite() && info.causality == Causality::Output => {
+            Value::Real(x)
+                if !x.is_finite()
+                    && matches!(info.causality, Causality::Output | Causality::Local) =>
+            {
                 Err(FmiError::error(format!(
                     "{func}: output `{}` is not finite at t = {}",
                     info.name, self.core.time
@@ -670,10 +673,10 @@ impl<M: Model> Instance<M> {
     /// SerializeFMUstate: the byte form of a snapshot ([`snapshot`] documents the format).
     pub fn serialize(&mut self, snapshot: &Snapshot<M>) -> Result<Vec<u8>, Status> {
         let f = self.func("SerializeFMUstate");
-        let r = self.allowed(f, self.masks().fmu_state).map(|()| {
-            let bytes = snapshot::serialize(snapshot);
+        let r = self.allowed(f, self.masks().fmu_state).and_then(|()| {
+            let bytes = snapshot::serialize(snapshot).map_err(|e| unwritable(f, e))?;
             trace!(self, "{f}: {} bytes", bytes.len());
-            bytes
+            Ok(bytes)
         });
         self.edge(r)
     }
@@ -681,10 +684,10 @@ impl<M: Model> Instance<M> {
     /// SerializedFMUstateSize.
     pub fn serialized_size(&mut self, snapshot: &Snapshot<M>) -> Result<usize, Status> {
         let f = self.func("SerializedFMUstateSize");
-        let r = self.allowed(f, self.masks().fmu_state).map(|()| {
-            let n = snapshot::serialize(snapshot).len();
+        let r = self.allowed(f, self.masks().fmu_state).and_then(|()| {
+            let n = snapshot::serialize(snapshot).map_err(|e| unwritable(f, e))?.len();
             trace!(self, "{f}: {n} bytes");
-            n
+            Ok(n)
         });
         self.edge(r)
     }
@@ -703,6 +706,13 @@ impl<M: Model> Instance<M> {
         });
         self.edge(r)
     }
+}
+
+/// A snapshot the writer refuses: one that its reader would refuse too.
+#[cold]
+#[inline(never)]
+fn unwritable(func: Func, e: String) -> FmiError {
+    FmiError::error(format!("{func}: the FMU state cannot be serialized: {e}"))
 }
 
 #[cold]

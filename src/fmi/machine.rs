@@ -32,6 +32,12 @@ impl State {
         State::ContinuousTimeMode,
     ];
 
+    /// After initialization, before the end: stepping (co-simulation) or in event or
+    /// continuous-time mode (Model Exchange).
+    pub fn is_running(self) -> bool {
+        matches!(self, State::StepComplete | State::EventMode | State::ContinuousTimeMode)
+    }
+
     pub(crate) fn bit(self) -> u32 {
         1 << self as u32
     }

@@ -77,11 +77,12 @@ pub fn version<M: Model>() -> u32 {
     CORE_VERSION * 1000 + M::STATE_VERSION
 }
 
-/// Serializes a snapshot.
-pub fn serialize<M: Model>(snapshot: &Snapshot<M>) -> Vec<u8> {
+/// Serializes a snapshot. The one walk that writes also checks what it writes with the
+/// reader's rules, so a snapshot that no reader would accept is an error here, not bytes.
+pub fn serialize<M: Model>(snapshot: &Snapshot<M>) -> Result<Vec<u8>, String> {
     let mut writer = Writer(Vec::with_capacity(1024));
     let mut copy = snapshot.clone();
-    visit(&mut copy, &mut writer).expect("a valid snapshot writes without error");
+    visit(&mut copy, &mut writer)?;
     let payload = writer.0;
     let mut out = Vec::with_capacity(HEADER + payload.len() + 8);
     out.extend_from_slice(MAGIC);
@@ -91,7 +92,7 @@ pub fn serialize<M: Model>(snapshot: &Snapshot<M>) -> Vec<u8> {
     out.extend_from_slice(&payload);
     let sum = fnv1a_64(&out);
     out.extend_from_slice(&sum.to_le_bytes());
-    out
+    Ok(out)
 }
 
 /// Makes the frame of `bytes` consistent again after an edit of the payload: its length and

@@ -300,7 +300,7 @@ fn a_fatal_instance_refuses_all_44_functions_and_stays_untouched() {
         let debug = |c: fmi2Component| format!("{:?}", instance(c).unwrap());
         let before = debug(c);
         assert!(before.contains("Fatal"), "{before}");
-        let snap_before = crate::fmi::serialize(snapshot(snap).unwrap());
+        let snap_before = crate::fmi::serialize(snapshot(snap).unwrap()).unwrap();
 
         let calls = instance_calls(c, snap, &bytes);
         let mut names: Vec<&str> = calls.iter().map(|(n, _)| *n).collect();
@@ -315,7 +315,7 @@ fn a_fatal_instance_refuses_all_44_functions_and_stays_untouched() {
             assert_eq!(message, &want);
         }
         assert_eq!(debug(c), before, "a fatal instance is not touched");
-        let snap_after = crate::fmi::serialize(snapshot(snap).unwrap());
+        let snap_after = crate::fmi::serialize(snapshot(snap).unwrap()).unwrap();
         assert_eq!(snap_after, snap_before, "nor are the FMU states passed to it");
         assert!(with_registry(|r| r.states.contains_key(&(snap as usize))), "nor freed");
 

@@ -3,7 +3,7 @@
 //! derivatives, the range of validity as event indicators, and the law's end as a time event.
 #![forbid(unsafe_code)]
 
-use super::variables::{Var, DERIVATIVES, EVENT_INDICATORS, STATES};
+use super::variables::{Causality, Var, DERIVATIVES, EVENT_INDICATORS, STATES};
 use super::BeamBodyFmu;
 use crate::fmi::{self, EventInfo, Notes, Setup, StepEnd};
 use crate::model::{BeamModel, Kinematics, Phi, PhiPiece, RangeCheck};
@@ -53,7 +53,7 @@ impl Exchange {
         let check = self.range != RangeCheck::Off;
         let v = match self.eq.check_range(self.t, self.piece(values), &self.x, check) {
             Err(v) => v,
-            Ok(()) if at_event => self.on_a_limit()?,
+            Ok(()) if at_event => self.on_a_limit(values)?,
             Ok(()) => return None,
         };
         let what = format!(
@@ -90,15 +90,19 @@ impl Exchange {
         Some([l - v1.abs(), std::f64::consts::FRAC_PI_2 - theta1.abs()])
     }
 
-    /// The limit the state is on, to within 1e-12 of it (relative), as a violation.
-    fn on_a_limit(&self) -> Option<RangeViolation> {
+    /// The limit the state is on, to within 1e-12 of it (relative), moving out, as a
+    /// violation. A state at rest on a limit (a start there) is inside, as co-simulation has it.
+    fn on_a_limit(&self, values: &super::values::Values) -> Option<RangeViolation> {
         let m = self.margins()?;
-        let (v1, theta1) = self.eq.tip(&self.x);
+        if m[0] > 1e-12 * self.eq.model().params.l && m[1] > 1e-12 {
+            return None;
+        }
+        let k = self.kinematics(values);
         let l = self.eq.model().params.l;
-        if m[0] <= 1e-12 * l {
-            Some(RangeViolation { name: "v1", value: v1, allowed: "|v1| <= l" })
-        } else if m[1] <= 1e-12 {
-            Some(RangeViolation { name: "theta1", value: theta1, allowed: "|theta1| <= pi/2" })
+        if m[0] <= 1e-12 * l && k.v1 * k.dv1 > 0.0 {
+            Some(RangeViolation { name: "v1", value: k.v1, allowed: "|v1| <= l" })
+        } else if m[1] <= 1e-12 && k.theta1 * k.dtheta1 > 0.0 {
+            Some(RangeViolation { name: "theta1", value: k.theta1, allowed: "|theta1| <= pi/2" })
         } else {
             None
         }
@@ -126,9 +130,9 @@ impl BeamBodyFmu {
     /// The Model Exchange equations at the start time from the current values.
     pub(super) fn build_exchange(&self, setup: &Setup) -> Result<Exchange, String> {
         check_fmi2(&self.values)?;
-        let eq = Equations::new(&self.values.settings, self.values.input.phi)
-            .map_err(|e| e.to_string())?;
         let t = setup.start_time;
+        let eq = Equations::new(&self.values.settings, t, self.values.input.phi)
+            .map_err(|e| e.to_string())?;
         let turned = eq.law().is_some_and(|law| t >= law.breakpoint());
         let range = eq.range_check();
         let mut ex = Exchange { eq, t, x: Vec::new(), turned, range };
@@ -192,7 +196,8 @@ impl BeamBodyFmu {
         ex.range = if warned { RangeCheck::Off } else { ex.eq.range_check() };
         ex.t = at.time;
         if let Some(law) = ex.eq.law() {
-            if ex.turned && ex.t < law.breakpoint() {
+            let bp = law.breakpoint();
+            if ex.turned && ex.t < bp && !crate::math::same_time(ex.t, bp, 0.0) {
                 return Err(format!(
                     "field `exchange.turned` = true before the law's end t_rot = {:?} (time = \
                      {:?})",
@@ -222,7 +227,9 @@ impl fmi::ModelExchange for BeamBodyFmu {
     fn state_count(&self) -> usize {
         match &self.exchange {
             Some(ex) => ex.x.len(),
-            None => 4 * self.values.settings.params.n_elements,
+            // FMI 2.0's model description: the four of `STATES` (other beams are refused at
+            // ExitInitializationMode, naming them).
+            None => STATES.len(),
         }
     }
 
@@ -257,7 +264,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
     }
 
     fn nominals(&self, out: &mut [f64]) {
-        // SI units: the paper's scene has |v1| ≤ 0.24 m, |ϑ1| ≤ 0.41 rad and rates of a few
+        // SI units: the paper's scene has |v1| ≤ 0.59 m, |ϑ1| ≤ 0.41 rad and rates of a few
         // per second, so 1 is their scale.
         out.fill(1.0);
     }
@@ -294,6 +301,12 @@ impl fmi::ModelExchange for BeamBodyFmu {
         Ok(end)
     }
 
+    /// The directional derivative of any output, state or state derivative (`unknowns`)
+    /// along `seed` in the states and the inputs φ, φ′, φ″ (`knowns`): the central difference
+    /// of the values [`get`](fmi::Model::get) reads, at the step ε = ε_mach^(1/3)·max(1,
+    /// max|(x, u)|)/max|seed| (relative accuracy about 1e-10: truncation O(ε²) against
+    /// round-off O(ε_mach/ε); max norms, which neither overflow nor underflow). With the law,
+    /// the inputs move nothing.
     fn directional_derivative(
         &mut self,
         unknowns: &[u32],
@@ -311,20 +324,18 @@ impl fmi::ModelExchange for BeamBodyFmu {
             ));
         }
         let names = |vars: &[Var]| -> String {
-            vars.iter()
-                .map(|v| format!("`{}` ({})", v.info().name, v.vr()))
-                .collect::<Vec<_>>()
-                .join(", ")
+            let names: Vec<String> =
+                vars.iter().map(|v| format!("`{}` ({})", v.info().name, v.vr())).collect();
+            names.join(", ")
         };
         let inputs = [Var::Phi, Var::Dphi, Var::Ddphi];
-        let ex = self.exchange();
-        let mut vx = vec![0.0; ex.x.len()];
-        let mut vhost = [0.0; 3];
+        let mut vx = [0.0; 4];
+        let mut vu = [0.0; 3];
         for (vr, s) in knowns.iter().zip(seed) {
             if let Some(k) = STATES.iter().position(|v| v.vr() == *vr) {
                 vx[k] += s;
             } else if let Some(k) = inputs.iter().position(|v| v.vr() == *vr) {
-                vhost[k] += s;
+                vu[k] += s;
             } else {
                 return Err(format!(
                     "known value reference {vr} is not a continuous state or an input: must \
@@ -334,22 +345,50 @@ impl fmi::ModelExchange for BeamBodyFmu {
                 ));
             }
         }
-        let vhost = Phi { phi: vhost[0], dphi: vhost[1], ddphi: vhost[2] };
-        let host = Exchange::host(&self.values);
-        let df = ex.eq.directional(ex.t, ex.turned, host, &ex.x, &vx, vhost);
-        for (vr, slot) in unknowns.iter().zip(out.iter_mut()) {
-            *slot = if let Some(k) = DERIVATIVES.iter().position(|v| v.vr() == *vr) {
-                df[k]
-            } else if let Some(k) = STATES.iter().position(|v| v.vr() == *vr) {
-                vx[k]
-            } else {
+        for vr in unknowns {
+            let computed = Var::from_vr(*vr).is_some_and(|v| {
+                matches!(v.info().causality, Causality::Output | Causality::Local)
+            });
+            if !computed {
                 return Err(format!(
-                    "unknown value reference {vr} is not a state derivative or a state: must \
-                     be one of {}, {}",
-                    names(&DERIVATIVES),
-                    names(&STATES)
+                    "unknown value reference {vr} is not an output, a state or a state \
+                     derivative: must be one of those of <ModelStructure> (the outputs, {})",
+                    names(&DERIVATIVES)
                 ));
-            };
+            }
+        }
+        let x0: Vec<f64> = self.exchange().x.clone();
+        let u0 = [self.values.input.phi, self.values.rates[0], self.values.rates[1]];
+        let amax = |a: &[f64]| a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let nv = amax(&vx).max(amax(&vu));
+        if nv == 0.0 {
+            out.fill(0.0);
+            return Ok(());
+        }
+        // ε_mach^(1/3) = 2^(-52/3).
+        const CBRT_EPS: f64 = 6.055454452393344e-6;
+        let eps = CBRT_EPS * amax(&x0).max(amax(&u0)).max(1.0) / nv;
+        let values = |fmu: &mut Self, s: f64| -> Result<Vec<f64>, String> {
+            let x: Vec<f64> = x0.iter().zip(&vx).map(|(a, b)| a + s * b).collect();
+            fmu.exchange_mut().x.copy_from_slice(&x);
+            fmu.values.input.phi = u0[0] + s * vu[0];
+            fmu.values.rates = [u0[1] + s * vu[1], u0[2] + s * vu[2]];
+            let setup = Setup { tolerance: None, start_time: 0.0, stop_time: None };
+            let got: Result<Vec<f64>, String> = unknowns
+                .iter()
+                .map(|vr| fmi::Model::get(fmu, *vr, &setup).map(fmi::Value::real))
+                .collect();
+            got
+        };
+        let plus = values(self, eps);
+        let minus = values(self, -eps);
+        // Back to the host's state and inputs, whatever happened.
+        self.exchange_mut().x.copy_from_slice(&x0);
+        self.values.input.phi = u0[0];
+        self.values.rates = [u0[1], u0[2]];
+        let (plus, minus) = (plus?, minus?);
+        for ((slot, p), m) in out.iter_mut().zip(&plus).zip(&minus) {
+            *slot = (p - m) / (2.0 * eps);
         }
         Ok(())
     }

@@ -19,8 +19,9 @@ pub mod variables;
 use crate::fmi::{self, Interface, Notes, Restore, Setup, State, StepFailure, Value};
 use crate::model::{BeamBody, Kinematics, Reactions};
 use crate::scene::PhiSource;
-use crate::sim::Run;
+use crate::sim::{Run, SimError};
 use crate::solver::check_rtol;
+use crate::solver::SolverError;
 use crate::visit::StateVisitor;
 use outputs::{Cache, Group};
 use values::Values;
@@ -46,6 +47,10 @@ pub struct BeamBodyFmu {
     at: f64,
     /// Where the integrator must stop: the experiment's stop time, or none (∞).
     stop: f64,
+    /// Running ahead, the integrator's last step, which ends after the communication time,
+    /// left the range of validity (`range_check = stop`): the next DoStep that reaches its end
+    /// fails there ([`Run::range_violation`] says why).
+    exit_ahead: bool,
     /// The equations a host integrates (Model Exchange), from ExitInitializationMode on, or
     /// built in initialization mode for the start state.
     pub exchange: Option<Box<exchange::Exchange>>,
@@ -63,6 +68,8 @@ struct PhiNotes {
     told_ignored: bool,
     /// Told that φ was never set (`phi_source` = input).
     told_unset: bool,
+    /// Told that co-simulation does not use `dphi` and `ddphi`.
+    told_rates: bool,
 }
 
 fn row(vr: u32) -> &'static Variable {
@@ -159,8 +166,7 @@ impl BeamBodyFmu {
     fn phi_used(&mut self, state: State, notes: &mut Notes) {
         self.phi.set = true;
         let law = self.values.settings.phi_source == PhiSource::Law;
-        let running = matches!(state, State::StepComplete | State::ContinuousTimeMode);
-        if !law || !running || self.phi.told_ignored {
+        if !law || !state.is_running() || self.phi.told_ignored {
             return;
         }
         self.phi.told_ignored = true;
@@ -171,6 +177,24 @@ impl BeamBodyFmu {
             PhiSource::Law as i32 + 1,
             PhiSource::Input as i32 + 1
         ));
+    }
+
+    /// After the host set `dphi` or `ddphi` between steps: co-simulation does not use them
+    /// (they are Model Exchange's φ′ and φ″: a master that sets every input would otherwise
+    /// send zeros as φ's derivatives), and with the law nobody does. Told once.
+    fn rates_used(&mut self, state: State, notes: &mut Notes) {
+        let law = self.values.settings.phi_source == PhiSource::Law;
+        if self.phi.told_rates || !(state == State::StepComplete || law && state.is_running()) {
+            return;
+        }
+        self.phi.told_rates = true;
+        notes.push(if law {
+            "the inputs `dphi` and `ddphi` are ignored: `phi_source` = law (said once)".to_string()
+        } else {
+            "the inputs `dphi` and `ddphi` are Model Exchange's φ′ and φ″; co-simulation ignores \
+             them and takes φ's derivatives through fmi2SetRealInputDerivatives (said once)"
+                .to_string()
+        });
     }
 
     /// Before a step (co-simulation) or at the first event (Model Exchange) with
@@ -255,6 +279,7 @@ impl fmi::Model for BeamBodyFmu {
             run: None,
             at: 0.0,
             stop: f64::INFINITY,
+            exit_ahead: false,
             exchange: None,
             cache: Cache::default(),
             phi: PhiNotes::default(),
@@ -291,8 +316,10 @@ impl fmi::Model for BeamBodyFmu {
             // The start state follows from the values: built again when next needed.
             self.exchange = None;
         }
-        if var.var == Var::Phi {
-            self.phi_used(state, notes);
+        match var.var {
+            Var::Phi => self.phi_used(state, notes),
+            Var::Dphi | Var::Ddphi => self.rates_used(state, notes),
+            _ => {}
         }
         Ok(())
     }
@@ -306,6 +333,7 @@ impl fmi::Model for BeamBodyFmu {
                 self.run = Some(run);
                 self.at = setup.start_time;
                 self.stop = setup.stop_time.unwrap_or(f64::INFINITY);
+                self.exit_ahead = false;
             }
             Interface::ModelExchange => {
                 self.exchange = Some(Box::new(self.build_exchange(setup)?));
@@ -363,6 +391,12 @@ impl fmi::Model for BeamBodyFmu {
             let what = if ahead { "is not within one step after" } else { "does not match" };
             return Err(format!("field `integrator time` = {t} {what} `time` = {}", at.time));
         }
+        v.flag("exit_ahead", &mut self.exit_ahead);
+        if self.exit_ahead && !(ahead && t > at.time && run.range_violation().is_some()) {
+            return Err("field `exit_ahead` = true, but the integrator's last step is not \
+                        ahead and out of the range of validity"
+                .into());
+        }
         self.at = at.time;
         self.stop = at.setup.stop_time.unwrap_or(f64::INFINITY);
         Ok(())
@@ -384,18 +418,38 @@ impl fmi::CoSimulation for BeamBodyFmu {
         self.values.input.dphi = None;
         self.values.input.ddphi = None;
         self.cache = Cache::default();
-        let (ahead, stop) = (self.runs_ahead(), self.stop);
+        // `to` may pass the stop time by the core's rounding allowance: never stop before it.
+        let (ahead, stop) = (self.runs_ahead(), self.stop.max(to));
         let run = self.run.as_mut().expect("a started model has a run");
+        if self.exit_ahead {
+            // The last step, past the last communication time, left the range at its end.
+            if to < run.t() {
+                self.at = to;
+                return Ok(());
+            }
+            let (t, why) = (run.t(), run.range_violation().map(|e| e.to_string()));
+            self.at = t;
+            let message = why.unwrap_or_else(|| "the state left the range of validity".into());
+            return Err(StepFailure { t, message });
+        }
         let stepped = if ahead {
             run.step_past(to, stop)
         } else {
             run.set_sample(sample);
             run.step_to(to)
         };
-        if let Err(e) = stepped {
-            let t = run.t().min(to);
-            self.at = t;
-            return Err(StepFailure { t, message: e.to_string() });
+        match stepped {
+            // Running ahead, the step that crossed `to` left the range after it: this step is
+            // complete; the one that reaches the exit fails there.
+            Err(SimError::Solver(SolverError::OutOfRange { .. })) if ahead && run.t() > to => {
+                self.exit_ahead = true;
+            }
+            Err(e) => {
+                let t = run.t().min(to);
+                self.at = t;
+                return Err(StepFailure { t, message: e.to_string() });
+            }
+            Ok(()) => {}
         }
         self.at = to;
         notes.extend(run.take_warning());

@@ -235,3 +235,88 @@ fn reactions_and_energy_are_computed_only_when_read() {
     assert_eq!(inst.get_real(&[Var::Energy.vr()], &mut x), Status::Ok);
     assert_eq!(x[0], o.energy);
 }
+
+/// Running ahead with the law, the fast turn (t_rot = 0.2 s) leaves the range of validity in
+/// an integrator step that ends between two communication points: the DoSteps before that
+/// end succeed, the one that reaches it is discarded there, at the time and with the
+/// message of the exit; an FMU state taken in between restores the same ending; and the
+/// outputs stop at the exit, as the standalone run's do.
+#[test]
+fn running_ahead_the_range_exit_ends_the_step_that_reaches_it() {
+    let start = |inst: &mut Instance| {
+        assert_eq!(inst.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
+        assert_eq!(inst.set_real(&[Var::TRot.vr()], &[0.2]), Status::Ok);
+        assert_eq!(inst.setup_experiment(Some(1e-6), 0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+    };
+    let (mut inst, msgs) = new_instance();
+    start(&mut inst);
+    let h = 0.001;
+    let mut k = 0;
+    let mut snapshots = Vec::new();
+    let discard = loop {
+        snapshots.push(inst.get_state().unwrap());
+        let status = inst.do_step(k as f64 * h, h);
+        if status != Status::Ok {
+            break status;
+        }
+        k += 1;
+        assert!(k < 1000, "the fast turn must leave the range");
+    };
+    assert_eq!(discard, Status::Discard);
+    let exit = inst.get_real_status(crate::fmi::STATUS_LAST_SUCCESSFUL_TIME).unwrap();
+    let message = msgs.borrow().last().unwrap().1.clone();
+    assert!(message.contains("theta1") && message.contains("range of validity"), "{message}");
+    assert!(exit > k as f64 * h && exit <= (k + 1) as f64 * h, "{exit} in step {k}");
+    assert!(message.contains(&format!("at t = {exit}")), "the exit's time: {message}");
+    // The state before the failing step, restored elsewhere, ends the same way.
+    let (mut other, _) = new_instance();
+    let before = snapshots.pop().unwrap();
+    let bytes = inst.serialize(&before).unwrap();
+    let restored = other.deserialize(&bytes).unwrap();
+    assert_eq!(other.set_state(&restored), Status::Ok);
+    assert_eq!(other.do_step(k as f64 * h, h), Status::Discard);
+    let again = other.get_real_status(crate::fmi::STATUS_LAST_SUCCESSFUL_TIME).unwrap();
+    assert_eq!(again, exit);
+}
+
+/// Co-simulation ignores the inputs `dphi` and `ddphi` (Model Exchange's): a host that sets
+/// them at every communication point (zeros, as a master that pushes every input does) gets
+/// the same numbers as one that does not, and is told once.
+#[test]
+fn co_simulation_ignores_dphi_and_ddphi() {
+    let run = |set_rates: bool| {
+        let (mut inst, msgs) = new_instance();
+        assert_eq!(inst.setup_experiment(Some(1e-6), 0.0, None), Status::Ok);
+        assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+        assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+        let mut v1 = Vec::new();
+        for k in 0..50 {
+            let t = k as f64 * 0.01;
+            let phi = crate::model::PaperLaw::default().eval(t).phi;
+            assert_eq!(inst.set_real(&[Var::Phi.vr()], &[phi]), Status::Ok);
+            if set_rates {
+                let status = inst.set_real(&[Var::Dphi.vr(), Var::Ddphi.vr()], &[0.0, 0.0]);
+                assert_eq!(status, if k == 0 { Status::Warning } else { Status::Ok }, "{k}");
+            }
+            assert_eq!(inst.do_step(t, 0.01), Status::Ok);
+            let mut x = [0.0];
+            assert_eq!(inst.get_real(&[Var::V1.vr()], &mut x), Status::Ok);
+            v1.push(x[0]);
+        }
+        let warnings: Vec<String> = msgs
+            .borrow()
+            .iter()
+            .filter(|(s, _)| *s == Status::Warning)
+            .map(|(_, m)| m.clone())
+            .collect();
+        (v1, warnings)
+    };
+    let (plain, none) = run(false);
+    let (with_rates, told) = run(true);
+    assert_eq!(plain, with_rates);
+    assert!(none.is_empty(), "{none:?}");
+    assert_eq!(told.len(), 1, "{told:?}");
+    assert!(told[0].contains("co-simulation ignores"), "{told:?}");
+}

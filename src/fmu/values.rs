@@ -15,7 +15,8 @@ pub struct Values {
     pub settings: Scene,
     /// The input φ and the derivatives sent for the next step only; its time is the step's.
     pub input: Sample,
-    /// The inputs `dphi` and `ddphi` as the host set them last (Model Exchange's φ′, φ″).
+    /// The inputs `dphi` and `ddphi` as the host set them last (Model Exchange's φ′, φ″;
+    /// co-simulation does not use them).
     pub rates: [f64; 2],
 }
 
@@ -101,11 +102,10 @@ impl Values {
             }
             (None, Value::Real(x)) if var.causality == Causality::Input => {
                 check_input(var, x)?;
+                // `dphi` and `ddphi` are Model Exchange's; co-simulation takes derivatives
+                // through fmi2SetRealInputDerivatives only (docs/decisions.md).
                 match rate(var.var) {
-                    // Co-simulation takes them as the derivatives for the next step, as
-                    // fmi2SetRealInputDerivatives does.
-                    Some(0) => (self.rates[0], self.input.dphi) = (x, Some(x)),
-                    Some(_) => (self.rates[1], self.input.ddphi) = (x, Some(x)),
+                    Some(k) => self.rates[k] = x,
                     None => self.input.phi = x,
                 }
                 Ok(())

@@ -385,15 +385,16 @@ pub const VARIABLES: &[Variable] = &[
         Var::Dphi,
         "dphi",
         "rad/s",
-        "Rate of the hinge angle, with phi_source = input: Model Exchange uses it with phi at \
-         every evaluation; in co-simulation, set at a communication point, it is phi's first \
-         derivative for the next step, as fmi2SetRealInputDerivatives of order 1",
+        "Rate of the hinge angle, with phi_source = input, for Model Exchange, which uses it \
+         with phi at every evaluation; co-simulation ignores it (phi's derivatives come by \
+         fmi2SetRealInputDerivatives there)",
     ),
     input(
         Var::Ddphi,
         "ddphi",
         "rad/s2",
-        "Angular acceleration of the hinge, with phi_source = input: as dphi, of order 2",
+        "Angular acceleration of the hinge, with phi_source = input, for Model Exchange: as \
+         dphi",
     ),
     derivative(Var::DerV1, Var::V1, "der(v1)", "m/s", "Time derivative of v1 (Model Exchange)"),
     derivative(

@@ -41,9 +41,9 @@ pub struct Equations {
 }
 
 impl Equations {
-    /// The equations of `scene`, whose φ at the start is `phi0` (the law's, or the host's
-    /// input). The DAE formulations are refused: they are not ODEs in minimal coordinates.
-    pub fn new(scene: &Scene, phi0: f64) -> Result<Equations, SimError> {
+    /// The equations of `scene` from `t0`, where the host's φ is `phi0` (the law's is its
+    /// own). The DAE formulations are refused: they are not ODEs in minimal coordinates.
+    pub fn new(scene: &Scene, t0: f64, phi0: f64) -> Result<Equations, SimError> {
         if scene.formulation.is_dae() {
             return Err(SimError::Setting(format!(
                 "`formulation` = {} is a DAE, which a host's ODE integrator cannot take: \
@@ -53,7 +53,7 @@ impl Equations {
             )));
         }
         let law = scene.law;
-        let phi0 = if scene.phi_source == PhiSource::Law { law.eval(0.0).phi } else { phi0 };
+        let phi0 = if scene.phi_source == PhiSource::Law { law.eval(t0).phi } else { phi0 };
         let (model, elements) = build_model(scene, phi0)?;
         Ok(Equations {
             model,
@@ -168,46 +168,5 @@ impl Equations {
             None => (x[0], x[1]),
             Some(e) => e.tip_values(&x[..e.dofs()]),
         }
-    }
-
-    /// The directional derivative of f at (t, x) with the host's φ, φ′, φ″ `host`, along `vx`
-    /// in the states and `vhost` in the host's input, by central differences (relative
-    /// accuracy about 1e-10: the step ε = ε_mach^(1/3)·max(1, |(x, φ)|)/|(vx, vφ)| balances
-    /// truncation, O(ε²), against round-off, O(ε_mach/ε)). `turned` as in
-    /// [`piece`](Self::piece); with the law, φ does not depend on the input.
-    #[allow(clippy::too_many_arguments)]
-    pub fn directional(
-        &self,
-        t: f64,
-        turned: bool,
-        host: Phi,
-        x: &[f64],
-        vx: &[f64],
-        vhost: Phi,
-    ) -> Vec<f64> {
-        let n = x.len();
-        let sq = |a: &[f64]| a.iter().map(|c| c * c).sum::<f64>();
-        let hv = [vhost.phi, vhost.dphi, vhost.ddphi];
-        let hx = [host.phi, host.dphi, host.ddphi];
-        let nv = (sq(vx) + sq(&hv)).sqrt();
-        if nv == 0.0 {
-            return vec![0.0; n];
-        }
-        // ε_mach^(1/3) = 2^(-52/3).
-        const CBRT_EPS: f64 = 6.055454452393344e-6;
-        let eps = CBRT_EPS * (sq(x) + sq(&hx)).sqrt().max(1.0) / nv;
-        let shifted = |s: f64| -> Vec<f64> {
-            let xs: Vec<f64> = x.iter().zip(vx).map(|(a, b)| a + s * b).collect();
-            let at = Phi {
-                phi: host.phi + s * vhost.phi,
-                dphi: host.dphi + s * vhost.dphi,
-                ddphi: host.ddphi + s * vhost.ddphi,
-            };
-            let mut f = vec![0.0; n];
-            self.derivatives(t, self.piece(t, turned, at), &xs, &mut f);
-            f
-        };
-        let (fp, fm) = (shifted(eps), shifted(-eps));
-        fp.iter().zip(&fm).map(|(a, b)| (a - b) / (2.0 * eps)).collect()
     }
 }

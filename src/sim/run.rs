@@ -10,7 +10,7 @@ use crate::model::{
     Outputs, PaperLaw, Phi, PhiPiece, Poly, RangeCheck, Sample, SystemN, TwoDofSystem,
 };
 use crate::scene::{InitialState, PhiSource, Scene};
-use crate::solver::{Bdf, BdfConfig, OdeSystem, SolverError, Stats, StepOutcome};
+use crate::solver::{Bdf, BdfConfig, OdeSystem, RangeViolation, SolverError, Stats, StepOutcome};
 use crate::visit::StateVisitor;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, Dyn, SVector, U4, U6};
@@ -517,6 +517,24 @@ impl Run {
                 other => return other,
             }
         }
+    }
+
+    /// Whether the state at the end of the last accepted step is outside the range of
+    /// validity: the error the integrator gave when that step left it, made again from the
+    /// same step (after an FMU state was restored, say).
+    pub fn range_violation(&self) -> Option<SolverError> {
+        let t = self.t();
+        let checked = match &self.bdf {
+            Integrator::TwoDof(b) => self.two_dof().check_range(t, b.y()),
+            Integrator::Dae(b) => self.dae().check_range(t, b.y()),
+            Integrator::Elements(b) => self.elements_system().check_range(t, b.y()),
+        };
+        checked.err().map(|RangeViolation { name, value, allowed }| SolverError::OutOfRange {
+            t,
+            name,
+            value,
+            allowed,
+        })
     }
 
     /// What to do when the state leaves the range of validity (default `Stop`).
