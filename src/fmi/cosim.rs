@@ -48,14 +48,15 @@ impl<M: CoSimulation> Instance<M> {
         let max = M::MAX_INPUT_DERIVATIVE_ORDER;
         for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
             let info = Self::lookup(f, *vr, BaseType::Real)?;
-            if info.causality != Causality::Input {
+            if info.causality != Causality::Input || !M::takes_derivatives(*vr) {
                 let inputs: Vec<String> = (0..M::variable_count() as u32)
-                    .filter_map(|k| M::variable(k).map(|v| (k, v)))
-                    .filter(|(_, v)| v.causality == Causality::Input)
-                    .map(|(k, v)| format!("`{}` ({k})", v.name))
+                    .filter(|k| M::takes_derivatives(*k))
+                    .filter_map(|k| M::variable(k).map(|v| format!("`{}` ({k})", v.name)))
                     .collect();
                 return Err(FmiError::error(format!(
-                    "{f}: value reference {vr} is not an input; only {} is",
+                    "{f}: value reference {vr} (`{}`) is not an input that takes derivatives; \
+                     only {} does",
+                    info.name,
                     inputs.join(", ")
                 )));
             }

@@ -138,8 +138,11 @@ pub trait CoSimulation: Model {
     /// Integrates from the communication time `from` to exactly `to`. Warnings (also those
     /// of a step that then fails) go to `notes`.
     fn do_step(&mut self, from: f64, to: f64, notes: &mut Notes) -> Result<(), StepFailure>;
+    /// Whether input `vr` takes derivatives (fmi2SetRealInputDerivatives).
+    fn takes_derivatives(vr: u32) -> bool;
     /// Keeps the derivative of order `order` of input `vr` for the next step only. The core
-    /// has checked that `vr` is an input, the order and that the value is finite.
+    /// has checked that `vr` is an input that takes derivatives, the order and that the value
+    /// is finite.
     fn set_input_derivative(&mut self, vr: u32, order: i32, value: f64);
     /// The derivative of order `order` of output `vr` at the current time; `Ok(None)` for an
     /// output that has none of that order.

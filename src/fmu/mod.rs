@@ -456,6 +456,11 @@ impl fmi::CoSimulation for BeamBodyFmu {
         Ok(())
     }
 
+    /// φ only: `dphi` and `ddphi` are Model Exchange's inputs.
+    fn takes_derivatives(vr: u32) -> bool {
+        vr == Var::Phi.vr()
+    }
+
     fn set_input_derivative(&mut self, vr: u32, order: i32, value: f64) {
         debug_assert_eq!(vr, Var::Phi.vr(), "the one input");
         let slot =

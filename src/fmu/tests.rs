@@ -320,3 +320,18 @@ fn co_simulation_ignores_dphi_and_ddphi() {
     assert_eq!(told.len(), 1, "{told:?}");
     assert!(told[0].contains("co-simulation ignores"), "{told:?}");
 }
+
+/// fmi2SetRealInputDerivatives takes φ's derivatives only: `dphi` and `ddphi` are inputs too
+/// (Model Exchange's), and are refused naming the one that takes them (found by fuzzing: the
+/// derivative of `ddphi` was taken as φ's).
+#[test]
+fn input_derivatives_are_phi_s_only() {
+    let (mut inst, msgs) = law_instance(1e-6);
+    for var in [Var::Dphi, Var::Ddphi, Var::V1] {
+        let status = inst.set_real_input_derivatives(&[var.vr()], &[1], &[1.0]);
+        assert_eq!(status, Status::Error, "{var:?}");
+        let last = msgs.borrow().last().unwrap().1.clone();
+        assert!(last.contains("only `phi` (19) does"), "{last}");
+    }
+    assert_eq!(inst.set_real_input_derivatives(&[Var::Phi.vr()], &[1], &[1.0]), Status::Ok);
+}
