@@ -18,8 +18,7 @@ impl<M: CoSimulation> Instance<M> {
     /// Whether `f`, a co-simulation function, may be called in the current state (`mask`)
     /// on this instance.
     fn cs_allowed(&self, f: super::instance::Func, mask: u32) -> FmiResult<()> {
-        self.require(f, Interface::CoSimulation)?;
-        self.allowed(f, mask)
+        self.allowed_in(f, Interface::CoSimulation, mask)
     }
 
     /// SetRealInputDerivatives: derivatives of the inputs at the next communication point,

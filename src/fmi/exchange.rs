@@ -31,8 +31,7 @@ impl<M: ModelExchange> Instance<M> {
     /// (`allowed`) on this instance.
     fn exchange(&self, func: &'static str, allowed: u32) -> FmiResult<super::instance::Func> {
         let f = self.func(func);
-        self.require(f, Interface::ModelExchange)?;
-        self.allowed(f, allowed)?;
+        self.allowed_in(f, Interface::ModelExchange, allowed)?;
         Ok(f)
     }
 
@@ -47,15 +46,20 @@ impl<M: ModelExchange> Instance<M> {
         )))
     }
 
-    /// EnterEventMode.
-    pub fn enter_event_mode(&mut self) -> Status {
-        let r = self.exchange("EnterEventMode", mask::EVENT_OR_CONTINUOUS).map(|f| {
-            self.core.state = State::EventMode;
+    /// A call that only changes the mode: `func`, allowed in `allowed`, leads to `to`.
+    fn enter_mode(&mut self, func: &'static str, allowed: u32, to: State) -> Status {
+        let r = self.exchange(func, allowed).map(|f| {
+            self.core.state = to;
             let t = self.core.time;
             trace!(self, "{f}: at t = {t:?}");
             Status::Ok
         });
         self.status(r)
+    }
+
+    /// EnterEventMode.
+    pub fn enter_event_mode(&mut self) -> Status {
+        self.enter_mode("EnterEventMode", mask::EVENT_OR_CONTINUOUS, State::EventMode)
     }
 
     /// NewDiscreteStates: one pass of the event iteration, and the call's status (a warning
@@ -75,13 +79,7 @@ impl<M: ModelExchange> Instance<M> {
 
     /// EnterContinuousTimeMode.
     pub fn enter_continuous_time_mode(&mut self) -> Status {
-        let r = self.exchange("EnterContinuousTimeMode", mask::EVENT).map(|f| {
-            self.core.state = State::ContinuousTimeMode;
-            let t = self.core.time;
-            trace!(self, "{f}: at t = {t:?}");
-            Status::Ok
-        });
-        self.status(r)
+        self.enter_mode("EnterContinuousTimeMode", mask::EVENT, State::ContinuousTimeMode)
     }
 
     /// CompletedIntegratorStep: the host accepted a step; the model checks its range.
@@ -210,8 +208,9 @@ impl<M: ModelExchange> Instance<M> {
         self.status(r)
     }
 
-    /// GetDirectionalDerivative of a Model Exchange instance: the model's Jacobian of its
-    /// derivatives times a seed of states or inputs.
+    /// GetDirectionalDerivative of a Model Exchange instance: the derivative of outputs,
+    /// states or state derivatives along a seed of states or inputs; a non-finite result is
+    /// an error.
     pub fn get_directional_derivative_exchange(
         &mut self,
         unknowns: &[u32],

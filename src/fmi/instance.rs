@@ -138,17 +138,18 @@ impl<M: Model> Instance<M> {
         self.core.interface.masks()
     }
 
-    /// Refuses a function of `interface` on an instance of another: logs why.
-    pub(crate) fn require(&self, func: impl fmt::Display, interface: Interface) -> FmiResult<()> {
+    /// Whether `func`, a function of `interface` only, may be called on this instance in the
+    /// current state (`mask`): a function of the other interface is refused naming both.
+    pub(crate) fn allowed_in(&self, func: Func, interface: Interface, mask: u32) -> FmiResult<()> {
         let mine = self.core.interface;
-        if mine == interface {
-            return Ok(());
+        if mine != interface {
+            return Err(FmiError::error(format!(
+                "{func}: a {} function, but this instance was instantiated for {}",
+                interface.name(),
+                mine.name()
+            )));
         }
-        Err(FmiError::error(format!(
-            "{func}: a {} function, but this instance was instantiated for {}",
-            interface.name(),
-            mine.name()
-        )))
+        self.allowed(func, mask)
     }
 
     /// The name of function `name` of this instance's interface, for messages.

@@ -24,19 +24,19 @@ pub struct Exchange {
     pub range: RangeCheck,
 }
 
-impl Exchange {
-    /// The host's φ, φ′, φ″ (phi_source = input).
-    fn host(values: &super::values::Values) -> Phi {
-        Phi { phi: values.input.phi, dphi: values.rates[0], ddphi: values.rates[1] }
-    }
+/// The host's φ, φ′, φ″ (phi_source = input).
+fn host(values: &super::values::Values) -> Phi {
+    Phi { phi: values.input.phi, dphi: values.rates[0], ddphi: values.rates[1] }
+}
 
-    /// The piece of φ at the current time.
-    pub fn piece(&self, values: &super::values::Values) -> PhiPiece {
-        self.eq.piece(self.t, self.turned, Self::host(values))
+impl Exchange {
+    /// The piece of φ at the current time, the host's input being `host`.
+    fn piece(&self, host: Phi) -> PhiPiece {
+        self.eq.piece(self.t, self.turned, host)
     }
 
     pub fn kinematics(&self, values: &super::values::Values) -> Kinematics {
-        self.eq.kinematics(self.t, self.piece(values), &self.x)
+        self.eq.kinematics(self.t, self.piece(host(values)), &self.x)
     }
 
     /// Checks the range at the current state: `None` inside it (or with the check off and
@@ -45,15 +45,11 @@ impl Exchange {
     ///
     /// At an event (`at_event`), a state on a limit to within the indicators' rounding counts
     /// as past it: that is where the host's root finding puts the event, on either side.
-    fn range_violation(
-        &mut self,
-        values: &super::values::Values,
-        at_event: bool,
-    ) -> Option<(String, bool)> {
+    fn range_violation(&mut self, host: Phi, at_event: bool) -> Option<(String, bool)> {
         let check = self.range != RangeCheck::Off;
-        let v = match self.eq.check_range(self.t, self.piece(values), &self.x, check) {
+        let v = match self.eq.check_range(self.t, self.piece(host), &self.x, check) {
             Err(v) => v,
-            Ok(()) if at_event => self.on_a_limit(values)?,
+            Ok(()) if at_event => self.on_a_limit(host)?,
             Ok(()) => return None,
         };
         let what = format!(
@@ -74,9 +70,7 @@ impl Exchange {
             RangeCheck::Off => (format!("{what}; terminateSimulation = true"), true),
         })
     }
-}
 
-impl Exchange {
     /// The event indicators: the margins of the quadratic model's range of validity, l − |v1|
     /// and π/2 − |ϑ1|; `None` with the check off, or for the exact beam, whose one limit (a
     /// centreline that crosses itself) is checked at each step's end.
@@ -92,16 +86,16 @@ impl Exchange {
 
     /// The limit the state is on, to within 1e-12 of it (relative), moving out, as a
     /// violation. A state at rest on a limit (a start there) is inside, as co-simulation has it.
-    fn on_a_limit(&self, values: &super::values::Values) -> Option<RangeViolation> {
+    fn on_a_limit(&self, host: Phi) -> Option<RangeViolation> {
         let m = self.margins()?;
-        if m[0] > 1e-12 * self.eq.model().params.l && m[1] > 1e-12 {
+        let on = [m[0] <= 1e-12 * self.eq.model().params.l, m[1] <= 1e-12];
+        if on == [false, false] {
             return None;
         }
-        let k = self.kinematics(values);
-        let l = self.eq.model().params.l;
-        if m[0] <= 1e-12 * l && k.v1 * k.dv1 > 0.0 {
+        let k = self.eq.kinematics(self.t, self.piece(host), &self.x);
+        if on[0] && k.v1 * k.dv1 > 0.0 {
             Some(RangeViolation { name: "v1", value: k.v1, allowed: "|v1| <= l" })
-        } else if m[1] <= 1e-12 && k.theta1 * k.dtheta1 > 0.0 {
+        } else if on[1] && k.theta1 * k.dtheta1 > 0.0 {
             Some(RangeViolation { name: "theta1", value: k.theta1, allowed: "|theta1| <= pi/2" })
         } else {
             None
@@ -136,7 +130,7 @@ impl BeamBodyFmu {
         let turned = eq.law().is_some_and(|law| t >= law.breakpoint());
         let range = eq.range_check();
         let mut ex = Exchange { eq, t, x: Vec::new(), turned, range };
-        ex.x = ex.eq.start(ex.piece(&self.values)).map_err(|e| e.to_string())?;
+        ex.x = ex.eq.start(ex.piece(host(&self.values))).map_err(|e| e.to_string())?;
         Ok(ex)
     }
 
@@ -199,9 +193,8 @@ impl BeamBodyFmu {
             let bp = law.breakpoint();
             if ex.turned && ex.t < bp && !crate::math::same_time(ex.t, bp, 0.0) {
                 return Err(format!(
-                    "field `exchange.turned` = true before the law's end t_rot = {:?} (time = \
+                    "field `exchange.turned` = true before the law's end t_rot = {bp:?} (time = \
                      {:?})",
-                    law.breakpoint(),
                     ex.t
                 ));
             }
@@ -251,7 +244,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
 
     fn derivatives(&mut self, out: &mut [f64]) -> Result<(), String> {
         let ex = self.exchange();
-        ex.eq.derivatives(ex.t, ex.piece(&self.values), &ex.x, out);
+        ex.eq.derivatives(ex.t, ex.piece(host(&self.values)), &ex.x, out);
         Ok(())
     }
 
@@ -271,7 +264,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
 
     fn update_discrete_states(&mut self, notes: &mut Notes) -> EventInfo {
         self.check_phi_sent(notes);
-        let values = self.values.clone();
+        let host = host(&self.values);
         let ex = self.exchange_mut();
         let mut info = EventInfo::default();
         if let Some(law) = ex.eq.law().copied() {
@@ -283,7 +276,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
                 info.next_event_time = Some(bp);
             }
         }
-        if let Some((msg, stop)) = ex.range_violation(&values, true) {
+        if let Some((msg, stop)) = ex.range_violation(host, true) {
             info.terminate_simulation = stop;
             notes.push(msg);
         }
@@ -291,10 +284,10 @@ impl fmi::ModelExchange for BeamBodyFmu {
     }
 
     fn completed_integrator_step(&mut self, notes: &mut Notes) -> Result<StepEnd, String> {
-        let values = self.values.clone();
+        let host = host(&self.values);
         let ex = self.exchange_mut();
         let mut end = StepEnd::default();
-        if let Some((msg, stop)) = ex.range_violation(&values, false) {
+        if let Some((msg, stop)) = ex.range_violation(host, false) {
             end.terminate_simulation = stop;
             notes.push(msg);
         }
