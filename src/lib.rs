@@ -30,10 +30,12 @@
 
 #![deny(unsafe_code)]
 
+pub mod capi;
 #[cfg(feature = "cli")]
 pub mod csv;
 pub mod fmi;
 pub mod fmi2;
+pub mod fmi3;
 pub mod fmu;
 pub mod hash;
 pub mod math;

@@ -3,7 +3,7 @@
 #![forbid(unsafe_code)]
 
 use super::description::{BaseType, Causality};
-use super::instance::{trace, Instance};
+use super::instance::{trace, Func, Instance};
 use super::machine::{mask, FmiError, FmiResult, Interface, State, Status};
 use super::model::{CoSimulation, Notes};
 use crate::math::same_time;
@@ -14,10 +14,13 @@ pub const STATUS_PENDING: i32 = 1;
 pub const STATUS_LAST_SUCCESSFUL_TIME: i32 = 2;
 pub const STATUS_TERMINATED: i32 = 3;
 
+/// The most parts an FMI 3.0 step with intermediate update is cut into.
+pub const MAX_INTERMEDIATE_POINTS: f64 = 64.0;
+
 impl<M: CoSimulation> Instance<M> {
     /// Whether `f`, a co-simulation function, may be called in the current state (`mask`)
     /// on this instance.
-    fn cs_allowed(&self, f: super::instance::Func, mask: u32) -> FmiResult<()> {
+    fn cs_allowed(&self, f: Func, mask: u32) -> FmiResult<()> {
         self.allowed_in(f, Interface::CoSimulation, mask)
     }
 
@@ -140,12 +143,73 @@ impl<M: CoSimulation> Instance<M> {
 
     /// DoStep: integrates from `tc` to exactly `tc + h`.
     pub fn do_step(&mut self, tc: f64, h: f64) -> Status {
-        let r = self.try_do_step(tc, h);
+        let f = self.func("DoStep");
+        let r = self.check_step(f, tc, h).and_then(|target| {
+            trace!(self, "{f}: tc = {tc}, h = {h}");
+            self.advance(f, tc, target)
+        });
         self.status(r)
     }
 
-    fn try_do_step(&mut self, tc: f64, h: f64) -> FmiResult {
+    /// FMI 3.0's DoStep with intermediate update, first call: checks the step as
+    /// [`do_step`](Self::do_step) does and gives the points it takes the host's inputs at,
+    /// after `tc`: spaced by the model's [`intermediate_spacing`](CoSimulation::intermediate_spacing)
+    /// (at most [`MAX_INTERMEDIATE_POINTS`] parts), the last one `tc + h` exactly. The
+    /// interface layer then calls [`step_part`](Self::step_part) for each part and the host's
+    /// callback between them.
+    pub fn plan_step(&mut self, tc: f64, h: f64, points: &mut Vec<f64>) -> Status {
         let f = self.func("DoStep");
+        let r = self.check_step(f, tc, h).map(|target| {
+            points.clear();
+            let parts = match self.core.model.intermediate_spacing() {
+                Some(dt) if dt > 0.0 => (h / dt).ceil().clamp(1.0, MAX_INTERMEDIATE_POINTS),
+                _ => 1.0,
+            } as usize;
+            points.extend((1..parts).map(|k| tc + h * k as f64 / parts as f64));
+            points.push(target);
+            trace!(self, "{f}: tc = {tc}, h = {h}, the host's inputs at {points:?}");
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// One part of a planned step, from the FMU's time to `to`.
+    pub fn step_part(&mut self, to: f64) -> Status {
+        let f = self.func("DoStep");
+        let from = self.core.time;
+        let r = self.cs_allowed(f, mask::STEP_COMPLETE).and_then(|()| {
+            trace!(self, "{f}: from t = {from:?} to {to:?}");
+            self.advance(f, from, to)
+        });
+        self.status(r)
+    }
+
+    /// Enters intermediate update mode at the FMU's time, between two parts of a step: the
+    /// host may set the intermediate inputs and get values.
+    pub fn enter_intermediate_update(&mut self) -> Status {
+        let f = self.func("DoStep");
+        let r = self.cs_allowed(f, mask::STEP_COMPLETE).map(|()| {
+            self.core.state = State::IntermediateUpdate;
+            let t = self.core.time;
+            trace!(self, "{f}: intermediate update at t = {t:?}");
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// Back to step mode after the host's intermediate-update callback.
+    pub fn leave_intermediate_update(&mut self) -> Status {
+        let f = self.func("DoStep");
+        let r = self.cs_allowed(f, mask::INTERMEDIATE_UPDATE).map(|()| {
+            self.core.state = State::StepComplete;
+            Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// The checks of a step from `tc` by `h`: the state, `h`, `tc` against the FMU's time,
+    /// the stop time. The step's end `tc + h`.
+    fn check_step(&self, f: Func, tc: f64, h: f64) -> FmiResult<f64> {
         self.cs_allowed(f, mask::STEP_COMPLETE)?;
         let time = self.core.time;
         if !(h.is_finite() && h > 0.0) {
@@ -173,9 +237,14 @@ impl<M: CoSimulation> Instance<M> {
                 )));
             }
         }
-        trace!(self, "{f}: tc = {tc}, h = {h}");
+        Ok(target)
+    }
+
+    /// The model's step from `from` to `to`, checked; the FMU's time becomes `to`, or where
+    /// the model stopped.
+    fn advance(&mut self, f: Func, from: f64, to: f64) -> FmiResult {
         let mut notes = Notes::new();
-        let result = self.core.model.do_step(tc, target, &mut notes);
+        let result = self.core.model.do_step(from, to, &mut notes);
         let told = self.notes(f, notes);
         if let Err(e) = result {
             let t = e.t;
@@ -183,15 +252,25 @@ impl<M: CoSimulation> Instance<M> {
             self.core.last_successful_time = t;
             self.core.terminated = true;
             self.core.state = State::StepFailed;
+            let (last, terminated) = if f.is_fmi3() {
+                ("lastSuccessfulTime", "terminateSimulation")
+            } else {
+                ("fmi2LastSuccessfulTime", "fmi2Terminated")
+            };
             return Err(FmiError::discard(format!(
-                "{f}: {}. The FMU stopped at t = {t} (fmi2LastSuccessfulTime), with \
-                 fmi2Terminated = true",
+                "{f}: {}. The FMU stopped at t = {t} ({last}), with {terminated} = true",
                 e.message
             )));
         }
-        self.core.time = target;
-        self.core.last_successful_time = target;
+        self.core.time = to;
+        self.core.last_successful_time = to;
         Ok(told)
+    }
+
+    /// After a step: whether the model ended the run (a discarded step), and the time of the
+    /// last successful one (FMI 3.0's DoStep returns both; FMI 2.0 asks by GetStatus).
+    pub fn step_end(&self) -> (bool, f64) {
+        (self.core.terminated, self.core.last_successful_time)
     }
 
     /// CancelStep: steps are synchronous, so there is never one to cancel.

@@ -40,6 +40,19 @@ pub struct ExchangeCapabilities {
     pub provides_directional_derivative: bool,
 }
 
+/// FMI 3.0's co-simulation flags beyond FMI 2.0's. Each one that is true is implemented and
+/// tested.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fmi3Capabilities {
+    /// fmi3DoStep calls the host's intermediate-update callback at the integrator's steps, and
+    /// the host may set the inputs listed as intermediate then.
+    pub provides_intermediate_update: bool,
+    pub has_event_mode: bool,
+    pub can_return_early_after_intermediate_update: bool,
+    /// The derivatives of the inputs the FMU's reconstruction expects to be continuous.
+    pub recommended_intermediate_input_smoothness: u32,
+}
+
 /// A `<Unit>`: name and SI base-unit exponents (kg, m, s, rad; the others are zero).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Unit {
@@ -63,6 +76,8 @@ pub enum Causality {
     Output,
     /// Computed and readable, never set: the derivatives of the continuous states.
     Local,
+    /// The one independent variable, time: the host's (FMI 3.0 requires it).
+    Independent,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,7 +111,7 @@ pub enum Type {
 }
 
 impl Type {
-    /// The FMI base type whose functions (fmi2GetReal, …) access the variable.
+    /// The FMI 2.0 base type whose functions (fmi2GetReal, …) access the variable.
     pub fn base(&self) -> BaseType {
         match self {
             Type::Real { .. } => BaseType::Real,
@@ -104,14 +119,60 @@ impl Type {
             Type::Boolean { .. } => BaseType::Boolean,
         }
     }
+
+    /// The FMI 3.0 type whose functions access it: Float64 (`Real`), Int32 (`Integer`),
+    /// Int64 for enumerations (FMI 3.0 §2.4.7.5), Boolean.
+    pub fn base3(&self) -> BaseType {
+        match self {
+            Type::Enumeration { .. } => BaseType::Int64,
+            _ => self.base(),
+        }
+    }
 }
 
+/// The types of the get and set functions. FMI 2.0 has the first four; FMI 3.0 calls `Real`
+/// Float64 and `Integer` Int32, and has the rest, of which this model has variables of Int64
+/// only (its enumerations).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BaseType {
     Real,
     Integer,
     Boolean,
     String,
+    Float32,
+    Int8,
+    UInt8,
+    Int16,
+    UInt16,
+    UInt32,
+    Int64,
+    UInt64,
+    Binary,
+    Clock,
+}
+
+impl BaseType {
+    /// Its name in FMI 3.0 (`fmi3` = true) or FMI 2.0.
+    pub fn name(self, fmi3: bool) -> &'static str {
+        match (self, fmi3) {
+            (BaseType::Real, true) => "Float64",
+            (BaseType::Integer, true) => "Int32",
+            (BaseType::Real, false) => "Real",
+            (BaseType::Integer, false) => "Integer",
+            (BaseType::Boolean, _) => "Boolean",
+            (BaseType::String, _) => "String",
+            (BaseType::Float32, _) => "Float32",
+            (BaseType::Int8, _) => "Int8",
+            (BaseType::UInt8, _) => "UInt8",
+            (BaseType::Int16, _) => "Int16",
+            (BaseType::UInt16, _) => "UInt16",
+            (BaseType::UInt32, _) => "UInt32",
+            (BaseType::Int64, _) => "Int64",
+            (BaseType::UInt64, _) => "UInt64",
+            (BaseType::Binary, _) => "Binary",
+            (BaseType::Clock, _) => "Clock",
+        }
+    }
 }
 
 /// What the core knows of one variable (a `<ScalarVariable>`).

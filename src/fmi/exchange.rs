@@ -77,6 +77,27 @@ impl<M: ModelExchange> Instance<M> {
         self.edge(r)
     }
 
+    /// GetNumberOfContinuousStates (FMI 3.0): the model's count, which before
+    /// initialization is the model description's.
+    pub fn number_of_continuous_states(&mut self) -> Result<usize, Status> {
+        let r = self.exchange("GetNumberOfContinuousStates", mask::COUNTS).map(|f| {
+            let n = self.core.model.state_count();
+            trace!(self, "{f}: {n}");
+            n
+        });
+        self.edge(r)
+    }
+
+    /// GetNumberOfEventIndicators (FMI 3.0).
+    pub fn number_of_event_indicators(&mut self) -> Result<usize, Status> {
+        let r = self.exchange("GetNumberOfEventIndicators", mask::COUNTS).map(|f| {
+            let n = M::INDICATORS;
+            trace!(self, "{f}: {n}");
+            n
+        });
+        self.edge(r)
+    }
+
     /// EnterContinuousTimeMode.
     pub fn enter_continuous_time_mode(&mut self) -> Status {
         self.enter_mode("EnterContinuousTimeMode", mask::EVENT, State::ContinuousTimeMode)

@@ -30,6 +30,11 @@ pub(crate) const LOG_CALLS: usize = 4;
 /// the host's logger; tests collect them.
 pub type Logger = Box<dyn FnMut(Status, &str, &str)>;
 
+/// The host's intermediate-update callback (FMI 3.0 co-simulation), called at a time inside
+/// a step. Shared, so that the interface layer calls a clone of it with no borrow of the
+/// instance alive: the host calls back into the instance from it.
+pub type IntermediateUpdate = std::rc::Rc<dyn Fn(f64)>;
+
 /// Log switches, per category of [`LOG_CATEGORIES`].
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct LogFlags(pub(crate) [bool; LOG_CATEGORIES.len()]);
@@ -39,9 +44,37 @@ pub(crate) struct LogFlags(pub(crate) [bool; LOG_CATEGORIES.len()]);
 #[derive(Clone, Copy)]
 pub struct Func(pub &'static str, pub &'static str);
 
+impl Func {
+    /// Whether the function is FMI 3.0's.
+    pub fn is_fmi3(&self) -> bool {
+        self.0 == "fmi3"
+    }
+}
+
 impl fmt::Display for Func {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}{}", self.0, self.1)
+        let name = if self.is_fmi3() { fmi3_name(self.1) } else { self.1 };
+        write!(f, "{}{}", self.0, name)
+    }
+}
+
+/// FMI 3.0's name of a function the core names as FMI 2.0 does: the same call, renamed.
+fn fmi3_name(name: &'static str) -> &'static str {
+    match name {
+        "GetFMUstate" => "GetFMUState",
+        "SetFMUstate" => "SetFMUState",
+        "FreeFMUstate" => "FreeFMUState",
+        "SerializedFMUstateSize" => "SerializedFMUStateSize",
+        "SerializeFMUstate" => "SerializeFMUState",
+        "DeSerializeFMUstate" => "DeserializeFMUState",
+        "GetReal" => "GetFloat64",
+        "SetReal" => "SetFloat64",
+        "GetInteger" => "GetInt32",
+        "SetInteger" => "SetInt32",
+        "GetDerivatives" => "GetContinuousStateDerivatives",
+        "GetRealOutputDerivatives" => "GetOutputDerivatives",
+        "NewDiscreteStates" => "UpdateDiscreteStates",
+        other => other,
     }
 }
 
@@ -53,6 +86,8 @@ pub struct Instance<M> {
     log: Logger,
     pub(crate) logging: LogFlags,
     pub(crate) core: Snapshot<M>,
+    /// The host's intermediate-update callback, when it asked to set an intermediate input.
+    intermediate_update: Option<IntermediateUpdate>,
 }
 
 impl<M: fmt::Debug> fmt::Debug for Instance<M> {
@@ -98,8 +133,9 @@ impl<M: Model> Instance<M> {
         let checked = if name.is_empty() {
             Err("instanceName is empty".to_string())
         } else if guid != M::guid() {
+            let what = if func.is_fmi3() { "instantiationToken" } else { "fmuGUID" };
             Err(format!(
-                "fmuGUID {guid} does not match this binary's {}: wrong or stale FMU",
+                "{what} {guid} does not match this binary's {}: wrong or stale FMU",
                 M::guid()
             ))
         } else {
@@ -115,6 +151,7 @@ impl<M: Model> Instance<M> {
             log,
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
             core: Snapshot::new(interface),
+            intermediate_update: None,
         };
         inst.trace(format_args!("{func}: instance `{name}`"));
         Some(inst)
@@ -122,6 +159,21 @@ impl<M: Model> Instance<M> {
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Keeps the host's intermediate-update callback (FMI 3.0 co-simulation).
+    pub fn set_intermediate_update(&mut self, callback: IntermediateUpdate) {
+        self.intermediate_update = Some(callback);
+    }
+
+    /// The host's intermediate-update callback, if it gave one.
+    pub fn intermediate_update(&self) -> Option<IntermediateUpdate> {
+        self.intermediate_update.clone()
+    }
+
+    /// The prefix of its interface's function names: the FMI version that made it (`fmi2`).
+    pub fn api(&self) -> &'static str {
+        self.api
     }
 
     pub fn state(&self) -> State {
@@ -307,6 +359,18 @@ impl<M: Model> Instance<M> {
     ) -> FmiResult {
         let f = self.func("SetupExperiment");
         self.allowed(f, mask::INSTANTIATED)?;
+        self.setup(f, tolerance, start_time, stop_time)
+    }
+
+    /// The experiment's setup, checked: FMI 2.0's SetupExperiment, FMI 3.0's
+    /// EnterInitializationMode.
+    fn setup(
+        &mut self,
+        f: Func,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> FmiResult {
         if let Some(tol) = tolerance {
             M::check_tolerance(tol).map_err(|allowed| {
                 FmiError::error(format!(
@@ -342,6 +406,24 @@ impl<M: Model> Instance<M> {
             self.core.state = State::InitializationMode;
             trace!(self, "{f}: state `initialization mode`");
             Status::Ok
+        });
+        self.status(r)
+    }
+
+    /// EnterInitializationMode of FMI 3.0, which takes the experiment's setup (FMI 2.0's
+    /// SetupExperiment).
+    pub fn enter_initialization_mode_with(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Status {
+        let f = self.func("EnterInitializationMode");
+        let r = self.allowed(f, mask::INSTANTIATED).and_then(|()| {
+            self.setup(f, tolerance, start_time, stop_time)?;
+            self.core.state = State::InitializationMode;
+            trace!(self, "{f}: state `initialization mode`");
+            Ok(Status::Ok)
         });
         self.status(r)
     }
@@ -394,6 +476,13 @@ impl<M: Model> Instance<M> {
         self.status(r)
     }
 
+    /// A function the model does not provide (FMI 3.0 §2.5: it returns Error and says so):
+    /// Error, with `why`.
+    pub fn unsupported(&mut self, name: &'static str, why: &str) -> Status {
+        let f = self.func(name);
+        self.status(Err(FmiError::error(format!("{f}: not provided: {why}"))))
+    }
+
     /// Marks the instance fatal after a caught panic: nothing but FreeInstance works
     /// afterwards.
     pub fn set_fatal(&mut self, msg: &str) {
@@ -406,8 +495,9 @@ impl<M: Model> Instance<M> {
     /// Finds `vr` and checks it has base type `base`.
     #[inline]
     pub(crate) fn lookup(func: Func, vr: u32, base: BaseType) -> FmiResult<&'static VarInfo> {
+        let fmi3 = func.is_fmi3();
         match M::variable(vr) {
-            Some(info) if info.ty.base() == base => Ok(info),
+            Some(info) if base == if fmi3 { info.ty.base3() } else { info.ty.base() } => Ok(info),
             found => Err(bad_reference(func, vr, base, found, M::variable_count())),
         }
     }
@@ -415,6 +505,9 @@ impl<M: Model> Instance<M> {
     /// The value of any variable of base type `base`.
     fn get_value(&mut self, func: Func, vr: u32, base: BaseType) -> FmiResult<Value> {
         let info = Self::lookup(func, vr, base)?;
+        if info.causality == Causality::Independent {
+            return Ok(Value::Real(self.core.time));
+        }
         let setup = self.core.setup;
         let value = self.core.model.get(vr, &setup).map_err(|msg| {
             FmiError::error(format!("{func}: the outputs cannot be computed: {msg}"))
@@ -461,9 +554,15 @@ impl<M: Model> Instance<M> {
         self.status(r)
     }
 
-    /// GetString and SetString for a model without string variables: any value reference
-    /// is refused.
-    pub fn no_strings(&mut self, name: &'static str, set: bool, vrs: &[u32]) -> Status {
+    /// The get and set functions of a type the model has no variable of (strings, and
+    /// FMI 3.0's Float32, Int8, …): any value reference is refused, naming its variable's type.
+    pub fn no_variables(
+        &mut self,
+        name: &'static str,
+        base: BaseType,
+        set: bool,
+        vrs: &[u32],
+    ) -> Status {
         let f = self.func(name);
         let allowed = if set { self.masks().set } else { self.masks().get };
         let r = self.allowed(f, allowed).and_then(|()| match vrs.first() {
@@ -471,7 +570,7 @@ impl<M: Model> Instance<M> {
                 trace!(self, "{f}: no variables");
                 Ok(Status::Ok)
             }
-            Some(vr) => Self::lookup(f, *vr, BaseType::String).map(|_| Status::Error),
+            Some(vr) => Self::lookup(f, *vr, base).map(|_| Status::Error),
         });
         self.status(r)
     }
@@ -508,7 +607,7 @@ impl<M: Model> Instance<M> {
         self.allowed(f, self.masks().set)?;
         let state = self.core.state;
         let info = Self::lookup(f, vr, base)?;
-        self.settable(f, info, state)?;
+        self.settable(f, vr, info, state)?;
         let mut notes = Notes::new();
         let set = self.core.model.set(vr, convert(value), state, &mut notes);
         set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
@@ -536,7 +635,7 @@ impl<M: Model> Instance<M> {
         let state = self.core.state;
         for (vr, value) in vrs.iter().zip(values) {
             let info = Self::lookup(f, *vr, base)?;
-            self.settable(f, info, state)?;
+            self.settable(f, *vr, info, state)?;
             // All or none: each value is checked before any is set.
             let checked = self.core.model.check(*vr, convert(*value));
             checked.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
@@ -550,13 +649,27 @@ impl<M: Model> Instance<M> {
         Ok(self.notes(f, notes))
     }
 
-    /// Whether `info` may be set in `state`: not an output, and a fixed parameter only
-    /// before initialization ends.
+    /// Whether `info` may be set in `state`: not an output, a fixed parameter only
+    /// before initialization ends, in intermediate update mode an intermediate input only.
     #[inline]
-    fn settable(&self, f: Func, info: &VarInfo, state: State) -> FmiResult<()> {
+    fn settable(&self, f: Func, vr: u32, info: &VarInfo, state: State) -> FmiResult<()> {
         let running = self.masks().running & state.bit() != 0;
+        if state == State::IntermediateUpdate && !M::intermediate_input(vr) {
+            let inputs: Vec<String> = (0..M::variable_count() as u32)
+                .filter(|k| M::intermediate_input(*k))
+                .filter_map(|k| M::variable(k).map(|v| format!("`{}`", v.name)))
+                .collect();
+            return Err(FmiError::error(format!(
+                "{f}: cannot set `{}` in intermediate update mode: only the inputs with \
+                 intermediateUpdate = true ({}) may be set there",
+                info.name,
+                inputs.join(", ")
+            )));
+        }
         match info.causality {
-            Causality::Output | Causality::Local => Err(self.refusal(f, info, state)),
+            Causality::Output | Causality::Local | Causality::Independent => {
+                Err(self.refusal(f, info, state))
+            }
             Causality::Parameter if running => Err(self.refusal(f, info, state)),
             _ => Ok(()),
         }
@@ -569,6 +682,7 @@ impl<M: Model> Instance<M> {
         let why = match info.causality {
             Causality::Output => "it is an output".to_string(),
             Causality::Local => "it is a calculated local variable".to_string(),
+            Causality::Independent => "it is the independent variable, the host's time".into(),
             _ => format!(
                 "it is a fixed parameter, settable only before {} (state is `{}`)",
                 self.func("ExitInitializationMode"),
@@ -595,7 +709,7 @@ impl<M: Model> Instance<M> {
 
     /// GetString, for a model without string variables.
     pub fn get_string(&mut self, vrs: &[u32]) -> Status {
-        self.no_strings("GetString", false, vrs)
+        self.no_variables("GetString", BaseType::String, false, vrs)
     }
 
     /// SetReal.
@@ -615,7 +729,7 @@ impl<M: Model> Instance<M> {
 
     /// SetString, for a model without string variables.
     pub fn set_string(&mut self, vrs: &[u32]) -> Status {
-        self.no_strings("SetString", true, vrs)
+        self.no_variables("SetString", BaseType::String, true, vrs)
     }
 
     // ----- FMU state ----------------------------------------------------------------------
@@ -736,10 +850,15 @@ fn bad_reference(
 ) -> FmiError {
     FmiError::error(match found {
         None => format!("{func}: unknown value reference {vr}: must be below {count}"),
-        Some(info) => format!(
-            "{func}: value reference {vr} is `{}`, a {:?} variable, not a {base:?}",
-            info.name,
-            info.ty.base()
-        ),
+        Some(info) => {
+            let fmi3 = func.is_fmi3();
+            let ty = if fmi3 { info.ty.base3() } else { info.ty.base() };
+            format!(
+                "{func}: value reference {vr} is `{}`, a {} variable, not a {}",
+                info.name,
+                ty.name(fmi3),
+                base.name(fmi3)
+            )
+        }
     })
 }

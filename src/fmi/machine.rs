@@ -4,8 +4,10 @@
 
 /// The states an instance can be in: co-simulation's (FMI 2.0, spec §4.2.4) and Model
 /// Exchange's (§3.2.3), which share the first two and the last three. `stepInProgress` and
-/// `stepCanceled` never occur: steps are synchronous. The order is that of a serialized
-/// state's `state` field: new states go last.
+/// `stepCanceled` never occur: steps are synchronous. FMI 3.0 has the same states under other
+/// names (Step Mode is `StepComplete`; a discarded step leaves it in `StepFailed`), and one
+/// more: Intermediate Update Mode, inside fmi3DoStep while the host's callback runs. The
+/// order is that of a serialized state's `state` field: new states go last.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum State {
     Instantiated,
@@ -17,10 +19,11 @@ pub enum State {
     Fatal,
     EventMode,
     ContinuousTimeMode,
+    IntermediateUpdate,
 }
 
 impl State {
-    const ALL: [State; 9] = [
+    const ALL: [State; 10] = [
         State::Instantiated,
         State::InitializationMode,
         State::StepComplete,
@@ -30,6 +33,7 @@ impl State {
         State::Fatal,
         State::EventMode,
         State::ContinuousTimeMode,
+        State::IntermediateUpdate,
     ];
 
     /// After initialization, before the end: stepping (co-simulation) or in event or
@@ -53,6 +57,7 @@ impl State {
             State::Fatal => "fatal",
             State::EventMode => "event mode",
             State::ContinuousTimeMode => "continuous-time mode",
+            State::IntermediateUpdate => "intermediate update mode",
         }
     }
 
@@ -86,11 +91,14 @@ pub(crate) mod mask {
         Error,
         EventMode,
         ContinuousTimeMode,
+        IntermediateUpdate,
     ]);
     pub const INSTANTIATED: u32 = bits(&[Instantiated]);
     pub const INITIALIZATION: u32 = bits(&[InitializationMode]);
     // Co-simulation's own functions.
     pub const STEP_COMPLETE: u32 = bits(&[StepComplete]);
+    /// Inside FMI 3.0's DoStep, while the host's callback runs.
+    pub const INTERMEDIATE_UPDATE: u32 = bits(&[IntermediateUpdate]);
     pub const STATUS: u32 = bits(&[StepComplete, StepFailed, Terminated]);
     pub const OUTPUT_DERIVATIVES: u32 = bits(&[StepComplete, StepFailed, Terminated, Error]);
     /// No state: the function needs a step in progress, which never exists.
@@ -102,6 +110,10 @@ pub(crate) mod mask {
     pub const STATES_AND_INDICATORS: u32 =
         bits(&[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error]);
     pub const DERIVATIVES: u32 = bits(&[EventMode, ContinuousTimeMode, Terminated, Error]);
+    /// FMI 3.0's GetNumberOfContinuousStates and GetNumberOfEventIndicators (Reference-FMUs'
+    /// masks).
+    pub const COUNTS: u32 =
+        bits(&[Instantiated, InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error]);
     pub const NOMINALS: u32 =
         bits(&[Instantiated, EventMode, ContinuousTimeMode, Terminated, Error]);
 }
@@ -118,18 +130,16 @@ pub enum Interface {
 /// The sets of states of one interface (see [`Interface::masks`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Masks {
-    /// Every state the interface has.
-    pub all: u32,
     /// The state ExitInitializationMode leads to.
     pub initialized: State,
     /// The get functions (and GetDirectionalDerivative).
     pub get: u32,
-    /// The set functions.
+    /// The set functions (in intermediate update mode, of the intermediate inputs only).
     pub set: u32,
     /// After initialization: fixed parameters can no longer be set, and the model runs.
     pub running: u32,
     pub terminate: u32,
-    /// Get, set and serialize FMU states.
+    /// Get, set and serialize FMU states; the states an FMU state can hold.
     pub fmu_state: u32,
 }
 
@@ -145,24 +155,25 @@ impl Interface {
         let get = mask::bits(get);
         let running = mask::bits(running);
         Masks {
-            all: running | mask::bits(&[Instantiated, InitializationMode, Error]),
             initialized,
             get,
             set: mask::bits(set),
             running,
             terminate: mask::bits(terminate),
-            fmu_state: get | mask::INSTANTIATED,
+            // Not inside fmi3DoStep's callback: the step is half done.
+            fmu_state: (get | mask::INSTANTIATED) & !mask::bits(&[IntermediateUpdate]),
         }
     }
 
-    /// FMI 2.0 §4.2.4 (co-simulation) and §3.2.3 (Model Exchange).
+    /// FMI 2.0 §4.2.4 (co-simulation) and §3.2.3 (Model Exchange); FMI 3.0 §4.2 adds
+    /// Intermediate Update Mode to co-simulation (an FMI 2.0 instance never enters it).
     pub(crate) fn masks(self) -> &'static Masks {
         use State::*;
         const CS: Masks = Interface::make(
-            &[StepComplete, StepFailed, Terminated],
+            &[StepComplete, StepFailed, Terminated, IntermediateUpdate],
             StepComplete,
-            &[InitializationMode, StepComplete, StepFailed, Terminated, Error],
-            &[Instantiated, InitializationMode, StepComplete],
+            &[InitializationMode, StepComplete, StepFailed, Terminated, Error, IntermediateUpdate],
+            &[Instantiated, InitializationMode, StepComplete, IntermediateUpdate],
             &[StepComplete, StepFailed],
         );
         const ME: Masks = Interface::make(

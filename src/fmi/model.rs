@@ -121,6 +121,9 @@ pub trait Model: Clone + fmt::Debug + Sized {
     /// Leaves initialization: checks every value together and starts at `setup.start_time`,
     /// for `interface` (its own integrator for co-simulation, the equations alone for Model
     /// Exchange).
+    /// Whether input `vr` may be set in intermediate update mode (FMI 3.0
+    /// `intermediateUpdate = "true"`).
+    fn intermediate_input(vr: u32) -> bool;
     fn start(&mut self, setup: &Setup, interface: Interface) -> Result<(), String>;
 
     /// Visits the model's part of a state, after the core's: a writer reads each field, a
@@ -154,6 +157,9 @@ pub trait CoSimulation: Model {
     ) -> Result<Option<f64>, String>;
     /// The outputs that have derivatives of order `order`, for messages.
     fn outputs_with_derivatives(order: i32) -> &'static str;
+    /// The spacing at which the model wants the host's inputs inside a step (FMI 3.0's
+    /// intermediate update): `None` when it uses no input between communication points.
+    fn intermediate_spacing(&self) -> Option<f64>;
 }
 
 /// A model whose equations a host integrates (FMI Model Exchange): continuous states x, their

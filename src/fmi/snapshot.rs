@@ -203,7 +203,7 @@ fn visit_core<M>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(), S
     })?;
     let mut state = s.state.to_index();
     v.count("state", &mut state);
-    let all = s.interface.masks().all;
+    let all = s.interface.masks().fmu_state;
     s.state = State::from_index(state).filter(|st| st.bit() & all != 0).ok_or_else(|| {
         format!(
             "field `state` = {state} is not a state a {} FMU state can hold",

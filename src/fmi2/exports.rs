@@ -9,10 +9,11 @@
 #![allow(unsafe_code)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-use super::guard::{get_values, guard, null_arg, set_values, slice, slice_mut, text};
-use super::registry::{register_state, snapshot, unregister_instance, with_registry};
 use super::types::*;
 use super::{Core, Instance};
+use crate::capi::guard::{get_values, guard, null_arg, set_values, slice, slice_mut, text};
+use crate::capi::registry::{unregister_instance, with_registry};
+use crate::capi::states;
 use crate::fmi::{Interface, Logger, Status};
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -240,42 +241,16 @@ values_function!(fmi2SetString, set_values, *const fmi2String, |inst, vr, _| ins
 /// `c` is an instance; `state` points to NULL or to a state from this library.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    guard(c, "fmi2GetFMUstate", |inst| {
-        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
-        let Some(slot) = (unsafe { state.as_mut() }) else {
-            return null_arg(inst, "fmi2GetFMUstate", "FMUstate", 1);
-        };
-        if slot.is_null() {
-            return match inst.get_state() {
-                Ok(core) => {
-                    *slot = register_state(inst, core);
-                    Status::Ok
-                }
-                Err(status) => status,
-            };
-        }
-        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
-        match unsafe { snapshot(*slot) } {
-            Some(existing) => inst.get_state_into(existing),
-            None => unknown_state(inst, "fmi2GetFMUstate"),
-        }
-    })
-}
-
-fn unknown_state(inst: &mut Instance, func: &str) -> Status {
-    inst.log(Status::Error, &format!("{func}: the FMU state is NULL, freed, or not from this FMU"));
-    Status::Error
+    // SAFETY: the function's contract is the helper's.
+    unsafe { states::get(c, "fmi2GetFMUstate", state) }
 }
 
 /// # Safety
 /// `c` is an instance; `state` is a state from fmi2GetFMUstate or fmi2DeSerializeFMUstate.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
-    guard(c, "fmi2SetFMUstate", |inst| match unsafe { snapshot(state) } {
-        Some(core) => inst.set_state(core),
-        None => unknown_state(inst, "fmi2SetFMUstate"),
-    })
+    // SAFETY: the function's contract is the helper's.
+    unsafe { states::set(c, "fmi2SetFMUstate", state) }
 }
 
 /// # Safety
@@ -286,23 +261,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    guard(c, "fmi2FreeFMUstate", |inst| {
-        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
-        let Some(slot) = (unsafe { state.as_mut() }) else {
-            return null_arg(inst, "fmi2FreeFMUstate", "FMUstate", 1);
-        };
-        let status = inst.check_free_state(slot.is_null());
-        if status != Status::Ok || slot.is_null() {
-            return status; // refused, or nothing to free
-        }
-        if with_registry(|r| r.states.remove(&(*slot as usize))).is_none() {
-            return unknown_state(inst, "fmi2FreeFMUstate");
-        }
-        // SAFETY: it was registered, so it came from Box::into_raw and is freed only here.
-        drop(unsafe { Box::from_raw(*slot as *mut Core) });
-        *slot = std::ptr::null_mut();
-        Status::Ok
-    })
+    // SAFETY: the function's contract is the helper's.
+    unsafe { states::free(c, "fmi2FreeFMUstate", state) }
 }
 
 /// # Safety
@@ -313,23 +273,8 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     state: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    guard(c, "fmi2SerializedFMUstateSize", |inst| {
-        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
-        let Some(size) = (unsafe { size.as_mut() }) else {
-            return null_arg(inst, "fmi2SerializedFMUstateSize", "size", 1);
-        };
-        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
-        let Some(core) = (unsafe { snapshot(state) }) else {
-            return unknown_state(inst, "fmi2SerializedFMUstateSize");
-        };
-        match inst.serialized_size(core) {
-            Ok(n) => {
-                *size = n;
-                Status::Ok
-            }
-            Err(status) => status,
-        }
-    })
+    // SAFETY: the function's contract is the helper's.
+    unsafe { states::serialized_size(c, "fmi2SerializedFMUstateSize", state, size) }
 }
 
 /// # Safety
@@ -342,30 +287,10 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serializedState: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    const F: &str = "fmi2SerializeFMUstate";
-    guard(c, F, |inst| {
-        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
-        let Some(core) = (unsafe { snapshot(state) }) else {
-            return unknown_state(inst, F);
-        };
-        let bytes = match inst.serialize(core) {
-            Ok(b) => b,
-            Err(status) => return status,
-        };
-        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
-        let Some(out) = (unsafe { slice_mut(serializedState as *mut u8, size) }) else {
-            return null_arg(inst, F, "serializedState", size);
-        };
-        if out.len() < bytes.len() {
-            inst.log(
-                Status::Error,
-                &format!("{F}: size = {size} is too small: the state needs {} bytes (fmi2SerializedFMUstateSize)", bytes.len()),
-            );
-            return Status::Error;
-        }
-        out[..bytes.len()].copy_from_slice(&bytes);
-        Status::Ok
-    })
+    // SAFETY: the function's contract is the helper's.
+    unsafe {
+        states::serialize(c, "fmi2SerializeFMUstate", state, serializedState as *mut u8, size)
+    }
 }
 
 /// # Safety
@@ -378,33 +303,10 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    const F: &str = "fmi2DeSerializeFMUstate";
-    guard(c, F, |inst| {
-        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
-        let Some(bytes) = (unsafe { slice(serializedState as *const u8, size) }) else {
-            return null_arg(inst, F, "serializedState", size);
-        };
-        // SAFETY: the pointer is the host's, valid as the FMI function's contract says.
-        let Some(slot) = (unsafe { state.as_mut() }) else {
-            return null_arg(inst, F, "FMUstate", 1);
-        };
-        let core = match inst.deserialize(bytes) {
-            Ok(core) => core,
-            Err(status) => return status,
-        };
-        if slot.is_null() {
-            *slot = register_state(inst, core);
-            return Status::Ok;
-        }
-        // SAFETY: `snapshot` finds only live states of this library; FMI forbids using one from two threads at once.
-        match unsafe { snapshot(*slot) } {
-            Some(existing) => {
-                *existing = *core;
-                Status::Ok
-            }
-            None => unknown_state(inst, F),
-        }
-    })
+    // SAFETY: the function's contract is the helper's.
+    unsafe {
+        states::deserialize(c, "fmi2DeSerializeFMUstate", serializedState as *const u8, size, state)
+    }
 }
 
 /// # Safety

@@ -3,25 +3,16 @@
 //! crate's `unsafe` code is here.
 //!
 //! - [`types`]: the C types.
-//! - `registry`: the live instances and FMU states; a pointer not in it is refused.
-//! - `guard`: the panic guard and the pointer checks, and the one shape of the get and set
-//!   functions.
-//! - [`exports`]: the 44 exported `fmi2…` functions (common, Model Exchange, co-simulation).
+//! - [`exports`]: the 44 exported `fmi2…` functions (common, Model Exchange, co-simulation),
+//!   over the C edge both versions share ([`crate::capi`]: registry, guard, FMU states).
 
 pub mod exports;
-mod guard;
-mod registry;
 #[cfg(test)]
 mod tests;
 pub mod types;
 
-use crate::fmi::{self, Interface, Logger, Status};
-use crate::fmu::BeamBodyFmu;
-
-/// An FMI 2.0 instance of the beam–body model.
-pub type Instance = fmi::Instance<BeamBodyFmu>;
-/// An FMU state of it.
-pub type Core = fmi::Snapshot<BeamBodyFmu>;
+pub use crate::capi::{Core, Instance};
+use crate::fmi::{Interface, Logger, Status};
 
 /// The prefix of FMI 2.0's function names, for messages.
 pub const API: &str = "fmi2";

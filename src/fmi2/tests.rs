@@ -2,9 +2,9 @@
 #![allow(unsafe_code)]
 
 use super::exports::*;
-use super::guard::guard;
-use super::registry::{instance, snapshot, with_registry};
 use super::types::*;
+use crate::capi::guard::guard;
+use crate::capi::registry::{instance, snapshot, with_registry};
 
 use crate::fmi::{Logger, State, Status};
 use crate::fmu::variables::Var;

@@ -25,7 +25,10 @@ use crate::solver::SolverError;
 use crate::visit::StateVisitor;
 use outputs::{Cache, Group};
 use values::Values;
-use variables::{Var, Variable, DEFAULT_EXPERIMENT, VARIABLES};
+use variables::{
+    Var, Variable, DEFAULT_EXPERIMENT, EVENT_INDICATORS, INDICATOR_VARIABLES, INTERMEDIATE_INPUTS,
+    VARIABLES,
+};
 
 /// Most internal steps in one DoStep, so that a step always returns in bounded time (about
 /// a second in a release build); beyond it the step is discarded with a message. The
@@ -110,6 +113,24 @@ impl BeamBodyFmu {
         };
         self.cache.kinematics = Some(k);
         Ok(k)
+    }
+
+    /// Event indicator `k` as a variable: Model Exchange's, or in co-simulation the same
+    /// margins of the range of validity at the current time.
+    fn range_margin(&mut self, k: usize, setup: &Setup) -> Result<f64, String> {
+        let mut m = [0.0; EVENT_INDICATORS];
+        if self.exchange.is_some() {
+            fmi::ModelExchange::event_indicators(self, &mut m);
+            return Ok(m[k]);
+        }
+        let kin = self.kinematics(setup)?;
+        let exact = self.values.settings.params.beam == crate::model::BeamModel::Exact;
+        if self.values.settings.range_check == crate::model::RangeCheck::Off || exact {
+            return Ok(1.0);
+        }
+        let l = self.values.settings.params.l;
+        m = [l - kin.v1.abs(), std::f64::consts::FRAC_PI_2 - kin.theta1.abs()];
+        Ok(m[k])
     }
 
     /// The model the outputs are computed with.
@@ -292,6 +313,9 @@ impl fmi::Model for BeamBodyFmu {
 
     fn get(&mut self, vr: u32, setup: &Setup) -> Result<Value, String> {
         let var = row(vr);
+        if let Some(k) = INDICATOR_VARIABLES.iter().position(|v| *v == var.var) {
+            return self.range_margin(k, setup).map(Value::Real);
+        }
         match self.values.get(var) {
             Some(v) => Ok(v),
             None => self.output(var.var, setup).map(Value::Real),
@@ -322,6 +346,10 @@ impl fmi::Model for BeamBodyFmu {
             _ => {}
         }
         Ok(())
+    }
+
+    fn intermediate_input(vr: u32) -> bool {
+        INTERMEDIATE_INPUTS.iter().any(|v| v.vr() == vr)
     }
 
     fn start(&mut self, setup: &Setup, interface: Interface) -> Result<(), String> {
@@ -481,5 +509,15 @@ impl fmi::CoSimulation for BeamBodyFmu {
 
     fn outputs_with_derivatives(order: i32) -> &'static str {
         outputs::with_derivatives(order)
+    }
+
+    /// With the host's φ and an adaptive step: the integrator's next step, so that the host's
+    /// φ arrives as densely as the integrator takes it.
+    fn intermediate_spacing(&self) -> Option<f64> {
+        let s = &self.values.settings;
+        if s.phi_source != PhiSource::Input || s.solver.fixed_step != 0.0 {
+            return None;
+        }
+        self.run.as_ref().map(Run::next_step_size)
     }
 }

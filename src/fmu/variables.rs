@@ -10,8 +10,8 @@
 #![forbid(unsafe_code)]
 
 pub use crate::fmi::description::{
-    BaseType, Capabilities, Causality, DefaultExperiment, ExchangeCapabilities, Type, Unit,
-    VarInfo, Variability, LOG_CATEGORIES,
+    BaseType, Capabilities, Causality, DefaultExperiment, ExchangeCapabilities, Fmi3Capabilities,
+    Type, Unit, VarInfo, Variability, LOG_CATEGORIES,
 };
 use crate::hash::fnv1a_128;
 use std::fmt;
@@ -137,6 +137,9 @@ pub enum Var {
     DerTheta1,
     DerDv1,
     DerDtheta1,
+    Time,
+    RangeMarginV1,
+    RangeMarginTheta1,
 }
 
 impl Var {
@@ -418,6 +421,36 @@ pub const VARIABLES: &[Variable] = &[
         "rad/s2",
         "Time derivative of dtheta1: the tip section's angular acceleration (Model Exchange)",
     ),
+    Variable {
+        var: Var::Time,
+        info: VarInfo {
+            name: "time",
+            causality: Causality::Independent,
+            variability: Variability::Continuous,
+            ty: Type::Real { unit: Some("s"), start: None, min: None, max: None },
+            description: "Simulation time",
+            derivative_of: None,
+        },
+        setting: None,
+    },
+    continuous(
+        Var::RangeMarginV1,
+        Causality::Local,
+        "range_margin_v1",
+        "m",
+        "l - |v1|: the margin of the quadratic model's range of validity in v1, an event \
+         indicator of Model Exchange (1 with range_check = off or the exact beam)",
+        None,
+    ),
+    continuous(
+        Var::RangeMarginTheta1,
+        Causality::Local,
+        "range_margin_theta1",
+        "rad",
+        "pi/2 - |theta1|: the margin of the range of validity in theta1, an event indicator of \
+         Model Exchange (1 with range_check = off or the exact beam)",
+        None,
+    ),
 ];
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates
@@ -429,6 +462,19 @@ pub const DERIVATIVES: [Var; 4] = [Var::DerV1, Var::DerTheta1, Var::DerDv1, Var:
 /// The number of event indicators: the margins of the range of validity, l − |v1| and
 /// π/2 − |ϑ1|.
 pub const EVENT_INDICATORS: usize = 2;
+/// The event indicators as variables (FMI 3.0 lists them by value reference).
+pub const INDICATOR_VARIABLES: [Var; EVENT_INDICATORS] =
+    [Var::RangeMarginV1, Var::RangeMarginTheta1];
+/// The inputs a host may set in intermediate update mode (FMI 3.0 co-simulation).
+pub const INTERMEDIATE_INPUTS: [Var; 1] = [Var::Phi];
+
+/// FMI 3.0's own capability flags (the others are FMI 2.0's).
+pub const FMI3_CAPABILITIES: Fmi3Capabilities = Fmi3Capabilities {
+    provides_intermediate_update: true,
+    has_event_mode: false,
+    can_return_early_after_intermediate_update: false,
+    recommended_intermediate_input_smoothness: 2,
+};
 
 /// The `<ModelExchange>` capability flags.
 pub const EXCHANGE_CAPABILITIES: ExchangeCapabilities = ExchangeCapabilities {
@@ -447,7 +493,7 @@ pub fn guid() -> &'static str {
     let bytes = GUID.get_or_init(|| {
         let text = format!(
             "{MODEL_IDENTIFIER}|{MODEL_NAME}|{MODEL_DESCRIPTION}|{DEFAULT_EXPERIMENT:?}|\
-             {CAPABILITIES:?}|{EXCHANGE_CAPABILITIES:?}|{STATES:?}|{EVENT_INDICATORS}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
+             {CAPABILITIES:?}|{EXCHANGE_CAPABILITIES:?}|{FMI3_CAPABILITIES:?}|{STATES:?}|{EVENT_INDICATORS}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
         );
         let h = fnv1a_128(text.as_bytes());
         let formatted = format!(

@@ -5,10 +5,9 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 use super::registry::instance;
-use super::types::{fmi2Component, fmi2Status, fmi2String, fmi2ValueReference};
-use super::Instance;
+use super::{CStatus, Handle, Instance};
 use crate::fmi::Status;
-use std::ffi::CStr;
+use std::ffi::{c_char, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
@@ -21,26 +20,35 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// Runs `body` on the instance behind `c`. NULL or unknown `c` gives fmi2Error (there is no
+/// Runs `body` on the instance behind `c`. NULL or unknown `c` gives Error (there is no
 /// logger to tell). A panic is caught, logged, and makes the instance fatal.
 ///
+/// An instance answers only the functions of the version that made it: `func`'s prefix
+/// (`fmi2`, `fmi3`) must be the instance's, else Error with a message (one binary serves both
+/// archives, and a host that mixed them up would otherwise reach a state machine that is not
+/// its version's).
+///
 /// A fatal instance refuses every call here, before `body` looks at any argument, with
-/// fmi2Error and an "illegal call sequence" message: FMI 2.0 (§2.1.3, fmi2Fatal) allows no
-/// further call, and the host already got fmi2Fatal from the call that panicked.
-pub(super) fn guard(
-    c: fmi2Component,
-    func: &str,
-    body: impl FnOnce(&mut Instance) -> Status,
-) -> fmi2Status {
+/// Error and an "illegal call sequence" message: FMI 2.0 (§2.1.3, fmi2Fatal) and FMI 3.0
+/// allow no further call, and the host already got Fatal from the call that panicked.
+pub(crate) fn guard(c: Handle, func: &str, body: impl FnOnce(&mut Instance) -> Status) -> CStatus {
     // SAFETY: see `instance`.
     let Some(inst) = (unsafe { instance(c) }) else {
-        return Status::Error as fmi2Status;
+        return Status::Error as CStatus;
     };
+    if !func.starts_with(inst.api()) {
+        let msg = format!(
+            "{func}: this instance was made by {}Instantiate…: it takes that version's calls only",
+            inst.api()
+        );
+        inst.log(Status::Error, &msg);
+        return Status::Error as CStatus;
+    }
     if !inst.check_not_fatal(func) {
-        return Status::Error as fmi2Status;
+        return Status::Error as CStatus;
     }
     match catch_unwind(AssertUnwindSafe(|| body(inst))) {
-        Ok(status) => status as fmi2Status,
+        Ok(status) => status as CStatus,
         Err(payload) => {
             let msg = format!("{func}: internal error (panic): {}", panic_text(&*payload));
             let _ = catch_unwind(AssertUnwindSafe(|| {
@@ -49,7 +57,7 @@ pub(super) fn guard(
                     inst.set_fatal(&msg);
                 }
             }));
-            Status::Fatal as fmi2Status
+            Status::Fatal as CStatus
         }
     }
 }
@@ -59,7 +67,7 @@ pub(super) fn guard(
 ///
 /// # Safety
 /// A non-NULL `p` must point to `n` valid elements, as the FMI caller guarantees.
-pub(super) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+pub(crate) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         return Some(&[]);
     }
@@ -71,7 +79,7 @@ pub(super) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
 }
 
 /// Mutable counterpart of [`slice`].
-pub(super) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         return Some(&mut []);
     }
@@ -83,7 +91,7 @@ pub(super) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]
 }
 
 /// A C string as UTF-8; `None` for NULL or invalid UTF-8.
-pub(super) unsafe fn text<'a>(s: fmi2String) -> Option<&'a str> {
+pub(crate) unsafe fn text<'a>(s: *const c_char) -> Option<&'a str> {
     if s.is_null() {
         return None;
     }
@@ -91,7 +99,7 @@ pub(super) unsafe fn text<'a>(s: fmi2String) -> Option<&'a str> {
     unsafe { CStr::from_ptr(s) }.to_str().ok()
 }
 
-pub(super) fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> Status {
+pub(crate) fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> Status {
     inst.log(
         Status::Error,
         &format!("{func}: argument `{arg}` is NULL (or misaligned) with {n} elements"),
@@ -104,14 +112,14 @@ pub(super) fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> 
 ///
 /// # Safety
 /// `vr` and `value` hold `nvr` elements, as the FMI caller guarantees.
-pub(super) unsafe fn get_values<T>(
-    c: fmi2Component,
+pub(crate) unsafe fn get_values<T>(
+    c: Handle,
     func: &str,
-    vr: *const fmi2ValueReference,
+    vr: *const u32,
     nvr: usize,
     value: *mut T,
     body: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> Status,
-) -> fmi2Status {
+) -> CStatus {
     // SAFETY: each pointer holds `nvr` elements (the function's contract).
     guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
         (Some(vr), Some(value)) => body(inst, vr, value),
@@ -124,14 +132,14 @@ pub(super) unsafe fn get_values<T>(
 ///
 /// # Safety
 /// `vr` and `value` hold `nvr` elements, as the FMI caller guarantees.
-pub(super) unsafe fn set_values<T>(
-    c: fmi2Component,
+pub(crate) unsafe fn set_values<T>(
+    c: Handle,
     func: &str,
-    vr: *const fmi2ValueReference,
+    vr: *const u32,
     nvr: usize,
     value: *const T,
     body: impl FnOnce(&mut Instance, &[u32], &[T]) -> Status,
-) -> fmi2Status {
+) -> CStatus {
     // SAFETY: each pointer holds `nvr` elements (the function's contract).
     guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
         (Some(vr), Some(value)) => body(inst, vr, value),

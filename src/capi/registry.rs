@@ -3,8 +3,7 @@
 #![allow(unsafe_code)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-use super::types::{fmi2Component, fmi2FMUstate};
-use super::{Core, Instance};
+use super::{Core, Handle, Instance};
 use std::cell::Cell;
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -14,12 +13,12 @@ use std::sync::Mutex;
 /// A pointer not in it (freed twice, foreign, garbage) is refused instead of dereferenced.
 /// B-trees rather than hash tables: no `RandomState`, so the library asks the operating system
 /// for no random numbers (Rust's std gets them from `ProcessPrng` on Windows, which wine 8 lacks).
-pub(super) struct Registry {
-    pub(super) instances: BTreeSet<usize>,
+pub(crate) struct Registry {
+    pub(crate) instances: BTreeSet<usize>,
     /// Each live FMU state, with the instance that made it. fmi2FreeInstance frees the
     /// states its instance leaves behind: it "frees all the allocated memory" of the
     /// instance (FMI 2.0 §2.1.5).
-    pub(super) states: BTreeMap<usize, usize>,
+    pub(crate) states: BTreeMap<usize, usize>,
 }
 
 static REGISTRY: Mutex<Option<Registry>> = Mutex::new(None);
@@ -28,7 +27,7 @@ static REGISTRY: Mutex<Option<Registry>> = Mutex::new(None);
 /// registered: a host that unloads the library (`dlclose`) cannot free what a static still
 /// owns, and valgrind counts it as lost once per load (tests/python/hosts/test_c_host.py). Empty
 /// tables do not allocate, so re-creating them costs nothing.
-pub(super) fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
+pub(crate) fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
     // No code panics while holding the lock, so poisoning can only come from outside; the
     // sets stay consistent either way.
     let mut guard = REGISTRY.lock().unwrap_or_else(|e| e.into_inner());
@@ -43,7 +42,7 @@ pub(super) fn with_registry<T>(f: impl FnOnce(&mut Registry) -> T) -> T {
 
 /// How many instances have been freed: a pointer found live at one count is live while the
 /// count stays the same.
-pub(super) static FREED: AtomicU64 = AtomicU64::new(0);
+pub(crate) static FREED: AtomicU64 = AtomicU64::new(0);
 
 thread_local! {
     /// The last instance this thread found live, with the count of frees then. It spares the
@@ -70,18 +69,18 @@ fn is_live(c: usize) -> bool {
 /// The instance behind `c`, if `c` is a live instance of this library.
 ///
 /// # Safety
-/// The host must not use the same instance from two threads at once (FMI 2.0 §2.1.1).
-pub(super) unsafe fn instance<'a>(c: fmi2Component) -> Option<&'a mut Instance> {
+/// The host must not use the same instance from two threads at once (FMI 2.0 §2.1.1, FMI 3.0 §2.1.3).
+pub(crate) unsafe fn instance<'a>(c: Handle) -> Option<&'a mut Instance> {
     if c.is_null() || !is_live(c as usize) {
         return None;
     }
-    // SAFETY: registered pointers come from Box::into_raw in fmi2Instantiate and are removed
-    // before fmi2FreeInstance drops them.
+    // SAFETY: registered pointers come from Box::into_raw in an Instantiate function and are
+    // removed before FreeInstance drops them.
     Some(unsafe { &mut *(c as *mut Instance) })
 }
 
 /// The snapshot behind `s`, if `s` is a live FMU state of this library.
-pub(super) unsafe fn snapshot<'a>(s: fmi2FMUstate) -> Option<&'a mut Core> {
+pub(crate) unsafe fn snapshot<'a>(s: Handle) -> Option<&'a mut Core> {
     if s.is_null() || !with_registry(|r| r.states.contains_key(&(s as usize))) {
         return None;
     }
@@ -90,8 +89,8 @@ pub(super) unsafe fn snapshot<'a>(s: fmi2FMUstate) -> Option<&'a mut Core> {
 }
 
 /// Registers a new FMU state made by `owner`.
-pub(super) fn register_state(owner: &Instance, core: Box<Core>) -> fmi2FMUstate {
-    let p = Box::into_raw(core) as fmi2FMUstate;
+pub(crate) fn register_state(owner: &Instance, core: Box<Core>) -> Handle {
+    let p = Box::into_raw(core) as Handle;
     let owner = owner as *const Instance as usize;
     with_registry(|r| r.states.insert(p as usize, owner));
     p
@@ -99,7 +98,7 @@ pub(super) fn register_state(owner: &Instance, core: Box<Core>) -> fmi2FMUstate 
 
 /// Unregisters instance `c` and the FMU states it made, and returns those states; `None`
 /// when `c` is NULL, unknown or already freed.
-pub(super) fn unregister_instance(c: fmi2Component) -> Option<Vec<usize>> {
+pub(crate) fn unregister_instance(c: Handle) -> Option<Vec<usize>> {
     let owner = c as usize;
     with_registry(|r| {
         if !r.instances.remove(&owner) {

@@ -1,0 +1,101 @@
+//! The FMI 3.0 interface, Model Exchange and Co-Simulation: a thin `extern "C"` layer over
+//! the generic core ([`crate::fmi`]) with the beam–body model ([`crate::fmu`]), in the same
+//! binary as FMI 2.0 (`BeamBody-fmi3.fmu` ships it in FMI 3.0's platform folders).
+//!
+//! - [`types`]: the C types.
+//! - [`exports`]: the 75 exported `fmi3…` functions, over the C edge both versions share
+//!   ([`crate::capi`]: registry, guard, FMU states). Those the model does not provide
+//!   (scheduled execution, clocks, configuration mode, adjoint derivatives, variable
+//!   dependencies, types it has no variables of) return fmi3Error with a message that says
+//!   why (FMI 3.0 §2.5).
+//!
+//! What FMI 3.0 changes for this model (ARCHITECTURE.md, "FMI 3.0"): the setup comes with
+//! EnterInitializationMode; enumerations are Int64; there are no input derivatives, and the
+//! host may hand over φ inside a step through its intermediate-update callback instead;
+//! co-simulation has no event mode (`hasEventMode = false`).
+
+pub mod exports;
+pub mod types;
+
+pub use crate::capi::{Core, Instance};
+use crate::fmi::{Interface, IntermediateUpdate, Logger, Status};
+use crate::fmu::variables::{Var, VARIABLES};
+
+/// The prefix of FMI 3.0's function names, for messages.
+pub const API: &str = "fmi3";
+
+/// What fmi3InstantiateCoSimulation takes beyond the common arguments.
+pub struct CoSimulationArgs<'a> {
+    pub event_mode_used: bool,
+    /// `requiredIntermediateVariables`.
+    pub required: &'a [u32],
+    /// The host's callback, wrapped: `None` when it passed NULL.
+    pub intermediate_update: Option<IntermediateUpdate>,
+}
+
+/// fmi3Instantiate… in safe Rust: `None`, after logging why, for an empty name, a wrong
+/// token, event mode asked of co-simulation, or a required intermediate variable that is
+/// not one.
+pub fn instantiate(
+    name: &str,
+    interface: Interface,
+    token: &str,
+    mut log: Logger,
+    logging_on: bool,
+    cs: Option<CoSimulationArgs>,
+) -> Option<Instance> {
+    let mut callback = None;
+    if let Some(cs) = cs {
+        if cs.event_mode_used {
+            let msg = "fmi3InstantiateCoSimulation: eventModeUsed = true, but this FMU's \
+                       co-simulation has no event mode (hasEventMode = false): its integrator \
+                       handles the law's end and the range check inside fmi3DoStep";
+            log(Status::Error, "logStatusError", msg);
+            return None;
+        }
+        if let Err(msg) = check_required(cs.required) {
+            log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {msg}"));
+            return None;
+        }
+        // The callback serves only a host that will set φ in it.
+        if cs.required.contains(&Var::Phi.vr()) {
+            callback = cs.intermediate_update;
+        }
+    }
+    let mut inst = Instance::instantiate(API, interface, name, token, log, logging_on)?;
+    if let Some(cb) = callback {
+        inst.set_intermediate_update(cb);
+    }
+    Some(inst)
+}
+
+/// The variables a host may name in `requiredIntermediateVariables`: the intermediate
+/// inputs, to set, and the outputs, to get.
+fn check_required(required: &[u32]) -> Result<(), String> {
+    use crate::fmi::description::Causality;
+    for vr in required {
+        let Some(v) = VARIABLES.get(*vr as usize) else {
+            return Err(format!(
+                "requiredIntermediateVariables holds unknown value reference {vr}: must be \
+                 below {}",
+                VARIABLES.len()
+            ));
+        };
+        let fits = match v.causality {
+            Causality::Output => true,
+            Causality::Input => {
+                <crate::fmu::BeamBodyFmu as crate::fmi::Model>::intermediate_input(*vr)
+            }
+            _ => false,
+        };
+        if !fits {
+            let phi = Var::Phi.info().name;
+            return Err(format!(
+                "requiredIntermediateVariables holds `{}` ({vr}), which is neither an output nor \
+                 an input with intermediateUpdate = true (`{phi}`)",
+                v.name
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,1 @@
+//! The FMI 3.0 state machine in every state.
