@@ -78,6 +78,8 @@ pub struct Scene {
     pub phi_source: PhiSource,
     pub phi_interpolation: Interpolation,
     pub phi_extrapolation: usize,
+    /// FMI 3.0's intermediate update: the spacing of the host's φ inside a step.
+    pub intermediate_step: f64,
     /// The CLI's emulated host also sends φ′, φ″ (`phi_source = input`).
     pub input_derivatives: bool,
     /// The CLI's emulated host's communication step [s].
@@ -106,6 +108,7 @@ impl Default for Scene {
             phi_source: PhiSource::Law,
             phi_interpolation: Interpolation::Smooth,
             phi_extrapolation: 3,
+            intermediate_step: 1e-3,
             input_derivatives: false,
             dt_comm: 0.01,
             solver: SolverSettings {
@@ -168,6 +171,7 @@ impl Scene {
             Key::PhiSource => Choice(position(&PhiSource::ALL, &self.phi_source)),
             Key::PhiInterpolation => Choice(position(&Interpolation::ALL, &self.phi_interpolation)),
             Key::PhiExtrapolation => Integer(self.phi_extrapolation as i64),
+            Key::IntermediateStep => Real(self.intermediate_step),
             Key::InputDerivatives => Bool(self.input_derivatives),
             Key::DtComm => Real(self.dt_comm),
             Key::Rtol => Real(s.rtol),
@@ -258,6 +262,7 @@ impl Scene {
                 self.phi_interpolation = item(&Interpolation::ALL, choice(value))
             }
             Key::PhiExtrapolation => self.phi_extrapolation = int(value) as usize,
+            Key::IntermediateStep => self.intermediate_step = real(value),
             Key::InputDerivatives => self.input_derivatives = flag(value),
             Key::DtComm => self.dt_comm = real(value),
             Key::Rtol => s.rtol = real(value),

@@ -169,6 +169,7 @@ pub enum Key {
     PhiSource,
     PhiInterpolation,
     PhiExtrapolation,
+    IntermediateStep,
     InputDerivatives,
     DtComm,
     Rtol,
@@ -363,7 +364,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 37] = [
+pub const SETTINGS: [Setting; 38] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -534,6 +535,18 @@ pub const SETTINGS: [Setting; 37] = [
         Integer(3),
         "Degree of the polynomial through the last input values that gives phi over a step \
          when the host sends no derivatives",
+        FMU,
+    ),
+    row(
+        K::IntermediateStep,
+        "intermediate_step",
+        real("s"),
+        NonNegative,
+        Real(1e-3),
+        "FMI 3.0 co-simulation, phi_source = input, with the host's intermediate-update \
+         callback: fmi3DoStep asks the host for phi every intermediate_step inside a \
+         communication step (the last part up to 1.25 times as long); 0 asks only at the \
+         communication points",
         FMU,
     ),
     row(

@@ -14,9 +14,6 @@ pub const STATUS_PENDING: i32 = 1;
 pub const STATUS_LAST_SUCCESSFUL_TIME: i32 = 2;
 pub const STATUS_TERMINATED: i32 = 3;
 
-/// The most parts an FMI 3.0 step with intermediate update is cut into.
-pub const MAX_INTERMEDIATE_POINTS: f64 = 64.0;
-
 impl<M: CoSimulation> Instance<M> {
     /// Whether `f`, a co-simulation function, may be called in the current state (`mask`)
     /// on this instance.
@@ -152,36 +149,38 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// FMI 3.0's DoStep with intermediate update, first call: checks the step as
-    /// [`do_step`](Self::do_step) does and gives the points it takes the host's inputs at,
-    /// after `tc`: spaced by the model's [`intermediate_spacing`](CoSimulation::intermediate_spacing)
-    /// (at most [`MAX_INTERMEDIATE_POINTS`] parts), the last one `tc + h` exactly. The
-    /// interface layer then calls [`step_part`](Self::step_part) for each part and the host's
-    /// callback between them.
-    pub fn plan_step(&mut self, tc: f64, h: f64, points: &mut Vec<f64>) -> Status {
+    /// [`do_step`](Self::do_step) does and gives its end `tc + h`. The interface layer then
+    /// calls [`step_part`](Self::step_part) until the end, and the host's callback between
+    /// the parts.
+    pub fn plan_step(&mut self, tc: f64, h: f64) -> Result<f64, Status> {
         let f = self.func("DoStep");
-        let r = self.check_step(f, tc, h).map(|target| {
-            points.clear();
-            let parts = match self.core.model.intermediate_spacing() {
-                Some(dt) if dt > 0.0 => (h / dt).ceil().clamp(1.0, MAX_INTERMEDIATE_POINTS),
-                _ => 1.0,
-            } as usize;
-            points.extend((1..parts).map(|k| tc + h * k as f64 / parts as f64));
-            points.push(target);
-            trace!(self, "{f}: tc = {tc}, h = {h}, the host's inputs at {points:?}");
-            Status::Ok
+        let r = self.check_step(f, tc, h).inspect(|_| {
+            trace!(self, "{f}: tc = {tc}, h = {h}, with intermediate update");
         });
-        self.status(r)
+        self.edge(r)
     }
 
-    /// One part of a planned step, from the FMU's time to `to`.
-    pub fn step_part(&mut self, to: f64) -> Status {
+    /// One part of a planned step towards `target`: the model's
+    /// [`intermediate_spacing`](CoSimulation::intermediate_spacing), or the rest of the step
+    /// when that is at most a quarter more. The status, and whether
+    /// `target` is reached.
+    pub fn step_part(&mut self, target: f64) -> (Status, bool) {
         let f = self.func("DoStep");
         let from = self.core.time;
+        let to = match self.core.model.intermediate_spacing() {
+            Some(dt) if dt > 0.0 && from + 1.25 * dt < target && from + dt > from => from + dt,
+            _ => target,
+        };
         let r = self.cs_allowed(f, mask::STEP_COMPLETE).and_then(|()| {
             trace!(self, "{f}: from t = {from:?} to {to:?}");
             self.advance(f, from, to)
         });
-        self.status(r)
+        (self.status(r), to == target)
+    }
+
+    /// The FMU's time.
+    pub fn time(&self) -> f64 {
+        self.core.time
     }
 
     /// Enters intermediate update mode at the FMU's time, between two parts of a step: the

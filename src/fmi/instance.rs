@@ -853,11 +853,13 @@ fn bad_reference(
         Some(info) => {
             let fmi3 = func.is_fmi3();
             let ty = if fmi3 { info.ty.base3() } else { info.ty.base() };
+            let a = |name: &str| if name.starts_with('I') { "an" } else { "a" };
+            let (is, asked) = (ty.name(fmi3), base.name(fmi3));
             format!(
-                "{func}: value reference {vr} is `{}`, a {} variable, not a {}",
+                "{func}: value reference {vr} is `{}`, {} {is} variable, not {} {asked}",
                 info.name,
-                ty.name(fmi3),
-                base.name(fmi3)
+                a(is),
+                a(asked)
             )
         }
     })

@@ -157,8 +157,9 @@ pub trait CoSimulation: Model {
     ) -> Result<Option<f64>, String>;
     /// The outputs that have derivatives of order `order`, for messages.
     fn outputs_with_derivatives(order: i32) -> &'static str;
-    /// The spacing at which the model wants the host's inputs inside a step (FMI 3.0's
-    /// intermediate update): `None` when it uses no input between communication points.
+    /// The spacing at which the model wants the host's inputs inside a communication step
+    /// (FMI 3.0's intermediate update): `None` when it takes no input between communication
+    /// points.
     fn intermediate_spacing(&self) -> Option<f64>;
 }
 

@@ -1002,7 +1002,7 @@ impl StepOuts<'_> {
 ///
 /// With the host's intermediate-update callback (given at instantiation, with `phi` among
 /// the required intermediate variables) and φ from the host, the step is cut at the
-/// integrator's step size: between the parts the instance is in intermediate update mode
+/// integrator's own steps: between the parts the instance is in intermediate update mode
 /// and the host's callback may set φ at that time. The callback runs with no borrow of the
 /// instance alive, since the host calls back into it.
 #[no_mangle]
@@ -1046,13 +1046,12 @@ pub unsafe extern "C" fn fmi3DoStep(
         last_successful_time: l,
     };
     let mut callback = None;
-    let mut points = Vec::new();
     let status = guard(instance, F, |inst| {
         let status = match inst.intermediate_update() {
             None => inst.do_step(tc, h),
             Some(cb) => {
                 callback = Some(cb);
-                inst.plan_step(tc, h, &mut points)
+                Status::Ok
             }
         };
         outs.write(inst);
@@ -1061,31 +1060,40 @@ pub unsafe extern "C" fn fmi3DoStep(
     let Some(callback) = callback else {
         return status;
     };
-    if status > fmi3Warning {
-        return status;
-    }
-    let mut worst = status;
-    for (k, to) in points.iter().enumerate() {
-        if k > 0 {
-            let entered = guard(instance, F, Instance::enter_intermediate_update);
-            if entered > fmi3Warning {
-                return entered;
-            }
-            callback(points[k - 1]);
-            let left = guard(instance, F, Instance::leave_intermediate_update);
-            if left > fmi3Warning {
-                return left;
-            }
+    let mut target = f64::NAN;
+    let planned = guard(instance, F, |inst| match inst.plan_step(tc, h) {
+        Ok(t) => {
+            target = t;
+            Status::Ok
         }
+        Err(status) => status,
+    });
+    if planned > fmi3Warning {
+        return planned;
+    }
+    // Part by part: the model's own internal steps, the host's callback after each but the
+    // last.
+    let mut worst = planned;
+    loop {
+        let (mut reached, mut t) = (true, f64::NAN);
         let part = guard(instance, F, |inst| {
-            let status = inst.step_part(*to);
+            let (status, end) = inst.step_part(target);
+            (reached, t) = (end, inst.time());
             outs.write(inst);
             status
         });
         worst = worst.max(part);
-        if part > fmi3Warning {
-            break;
+        if part > fmi3Warning || reached {
+            return worst;
+        }
+        let entered = guard(instance, F, Instance::enter_intermediate_update);
+        if entered > fmi3Warning {
+            return entered;
+        }
+        callback(t);
+        let left = guard(instance, F, Instance::leave_intermediate_update);
+        if left > fmi3Warning {
+            return left;
         }
     }
-    worst
 }

@@ -140,6 +140,7 @@ pub enum Var {
     Time,
     RangeMarginV1,
     RangeMarginTheta1,
+    IntermediateStep,
 }
 
 impl Var {
@@ -451,6 +452,7 @@ pub const VARIABLES: &[Variable] = &[
          Model Exchange (1 with range_check = off or the exact beam)",
         None,
     ),
+    param(Var::IntermediateStep, Key::IntermediateStep),
 ];
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates

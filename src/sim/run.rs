@@ -269,15 +269,6 @@ impl Run {
         }
     }
 
-    /// The step size the integrator would take next.
-    pub fn next_step_size(&self) -> f64 {
-        match &self.bdf {
-            Integrator::TwoDof(b) => b.next_step().1,
-            Integrator::Dae(b) => b.next_step().1,
-            Integrator::Elements(b) => b.next_step().1,
-        }
-    }
-
     /// The piece of φ in use.
     pub fn piece(&self) -> PhiPiece {
         self.piece

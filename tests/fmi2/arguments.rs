@@ -232,7 +232,8 @@ fn every_get_and_set_of_the_wrong_type_is_refused_naming_the_variable() {
         let base = var.ty.base();
         let vrs = [var.vr()];
         let needles = |func: &'static str| {
-            [func, &format!("`{}`", var.name), &format!("a {base:?} variable")].map(String::from)
+            let a = if base == BaseType::Integer { "an" } else { "a" };
+            [func, &format!("`{}`", var.name), &format!("{a} {base:?} variable")].map(String::from)
         };
         let mut check = |func: &'static str, status: fmi2Status| {
             let n = needles(func);

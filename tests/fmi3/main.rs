@@ -4,7 +4,7 @@
 //! functions the model does not provide, NULL pointers, and the state machine in every
 //! state (`misuse.rs`).
 
-#[allow(dead_code, unused_imports)]
+#[allow(unused_imports)]
 #[path = "../common/mod.rs"]
 mod common;
 mod misuse;
@@ -33,6 +33,11 @@ pub fn vr(var: Var) -> fmi3ValueReference {
     var.vr()
 }
 
+/// A call on an instance, made from inside the host's callback.
+pub type Probe = fn(fmi3Instance) -> fmi3Status;
+/// φ(t), as the host's callback sets it.
+pub type Signal = fn(f64) -> f64;
+
 /// What the host's callbacks see: the log, and for the intermediate-update callback the
 /// instance and what it does there.
 #[derive(Default)]
@@ -40,12 +45,12 @@ pub struct Env {
     pub log: RefCell<Vec<(fmi3Status, String, String)>>,
     pub instance: Cell<usize>,
     /// φ(t) the callback sets; `None`: the callback sets nothing.
-    pub phi: Cell<Option<fn(f64) -> f64>>,
+    pub phi: Cell<Option<Signal>>,
     pub times: RefCell<Vec<f64>>,
     /// Statuses of the calls the callback made.
     pub statuses: RefCell<Vec<fmi3Status>>,
     /// A call to make from inside the callback, with its status kept in `statuses`.
-    pub probe: Cell<Option<fn(fmi3Instance) -> fmi3Status>>,
+    pub probe: Cell<Option<Probe>>,
 }
 
 unsafe extern "C" fn log_message(
@@ -280,4 +285,416 @@ fn co_simulation_is_fmi2_s_bit_for_bit() {
     }
     assert!(a.real(Var::V1).abs() > 0.1, "the beam moved");
     unsafe { f2::fmi2FreeInstance(b) };
+}
+
+/// A host's φ, values only at the communication points, with phi_source = input.
+fn input_host(name: &str, required: &[u32], callback: bool) -> Host {
+    let h = Host::cs_with(name, required, callback);
+    h.ok(h.set_enum(Var::PhiSource, 1));
+    h.ok(h.set_real(Var::Phi, paper_phi(0.0)));
+    h.initialize();
+    h
+}
+
+/// Runs `h` to t = 1.02 by steps of `dt`, setting φ at each communication point; the tip's
+/// motion at the end.
+fn run_input(h: &Host, dt: f64) -> Vec<f64> {
+    let n = (1.02 / dt).round() as usize;
+    let mut t = 0.0;
+    for k in 0..n {
+        h.ok(h.set_real(Var::Phi, paper_phi(t)));
+        let (s, _, _) = h.step(t, dt);
+        assert_eq!(s, OK, "{:#?}", h.take());
+        t = (k + 1) as f64 * dt;
+    }
+    let (s, y) = h.get_reals(&MOTION);
+    h.ok(s);
+    y
+}
+
+/// The host's φ through the intermediate-update callback: called inside each step every
+/// `intermediate_step` (1 ms), it sets φ there, and the run is then far closer to the law's
+/// than with φ at the communication points only (values reconstructed from samples 42.5 ms
+/// apart; measured 1.3e-5 m against 6.5e-3 m).
+#[test]
+fn intermediate_update_hands_phi_inside_the_step() {
+    let reference = {
+        let h = Host::cs("law");
+        h.ok(h.set_enum(Var::PhiSource, 2));
+        h.initialize();
+        h.steps(0.0, 0.0425, 24);
+        h.get_reals(&MOTION).1
+    };
+    let values_only = run_input(&input_host("values", &[], false), 0.0425);
+    let host = input_host("intermediate", &[vr(Var::Phi)], true);
+    host.env.phi.set(Some(paper_phi));
+    let intermediate = run_input(&host, 0.0425);
+    let times = host.env.times.borrow().clone();
+    // 42 parts of 1 ms and one of 1.5 ms in each step (the last part up to 1.25 ms).
+    assert_eq!(times.len(), 24 * 42, "the callback ran inside the steps");
+    assert!(times.windows(2).all(|w| w[1] - w[0] > 0.99e-3 && w[1] - w[0] < 1.51e-3));
+    assert!(host.env.statuses.borrow().iter().all(|s| *s == OK), "{:#?}", host.take());
+    let err = |y: &[f64]| (y[0] - reference[0]).abs();
+    let (e_values, e_intermediate) = (err(&values_only), err(&intermediate));
+    assert!(
+        e_intermediate < 0.01 * e_values && e_intermediate < 1e-4,
+        "v1 error with intermediate update {e_intermediate:e}, values only {e_values:e}"
+    );
+    // Without `phi` among the required variables the callback is never called.
+    let quiet = input_host("not required", &[vr(Var::V1)], true);
+    quiet.env.phi.set(Some(paper_phi));
+    run_input(&quiet, 0.0425);
+    assert!(quiet.env.times.borrow().is_empty());
+    // With the law, the callback is given but there is nothing to hand over: one part.
+    let law = Host::cs_with("law with callback", &[vr(Var::Phi)], true);
+    law.ok(law.set_enum(Var::PhiSource, 2));
+    law.initialize();
+    law.steps(0.0, 0.0425, 4);
+    assert!(law.env.times.borrow().is_empty());
+}
+
+/// Inside the callback: the intermediate input may be set, values read; other inputs,
+/// parameters, a nested step and FMU states are refused.
+#[test]
+fn intermediate_update_mode_allows_only_its_calls() {
+    fn probes() -> [(Probe, fmi3Status); 5] {
+        [
+            (|c| unsafe { fmi3SetFloat64(c, &vr(Var::Dphi), 1, &0.0, 1) }, ERROR),
+            (|c| unsafe { fmi3SetFloat64(c, &vr(Var::L), 1, &2.0, 1) }, ERROR),
+            (
+                |c| {
+                    let (mut a, mut b, mut d, mut t) = (0, 0, 0, 0.0);
+                    unsafe { fmi3DoStep(c, 0.0, 0.01, 1, &mut a, &mut b, &mut d, &mut t) }
+                },
+                ERROR,
+            ),
+            (
+                |c| {
+                    let mut s = null_mut();
+                    unsafe { fmi3GetFMUState(c, &mut s) }
+                },
+                ERROR,
+            ),
+            (
+                |c| {
+                    let mut y = [0.0; 2];
+                    let vrs = [vr(Var::V1), vr(Var::Time)];
+                    unsafe { fmi3GetFloat64(c, vrs.as_ptr(), 2, y.as_mut_ptr(), 2) }
+                },
+                OK,
+            ),
+        ]
+    }
+    for (k, (probe, want)) in probes().into_iter().enumerate() {
+        let host = input_host(&format!("probe {k}"), &[vr(Var::Phi)], true);
+        host.env.probe.set(Some(probe));
+        host.env.phi.set(Some(paper_phi));
+        host.ok(host.set_real(Var::Phi, 0.0));
+        let (s, _, _) = host.step(0.0, 0.0425);
+        assert_eq!(s, OK, "{:#?}", host.take());
+        let got = host.env.statuses.borrow().clone();
+        assert!(!got.is_empty());
+        assert!(got.chunks(2).all(|pair| pair == [OK, want]), "probe {k}: {got:?}");
+        let log = host.take();
+        if want == ERROR {
+            let needle = [
+                "intermediate update mode",
+                "intermediate update mode",
+                "illegal call sequence",
+                "illegal call sequence",
+                "",
+            ][k];
+            assert!(log.iter().any(|(_, _, m)| m.contains(needle)), "probe {k}: {log:#?}");
+        }
+        // After the step, the instance is back in step mode.
+        host.steps(0.0425, 0.0425, 1);
+    }
+}
+
+/// Model Exchange: 4 states, 2 event indicators equal to the `range_margin_*` variables,
+/// derivatives those of FMI 2.0's Model Exchange at the same state.
+#[test]
+fn model_exchange_gives_fmi2_s_derivatives() {
+    use beam_body::fmi2::exports as f2;
+    let a = Host::me("me3");
+    a.ok(a.set_enum(Var::PhiSource, 2));
+    let mut n = 0usize;
+    a.ok(unsafe { fmi3GetNumberOfContinuousStates(a.c, &mut n) });
+    assert_eq!(n, 4);
+    a.ok(unsafe { fmi3GetNumberOfEventIndicators(a.c, &mut n) });
+    assert_eq!(n, 2);
+    a.initialize();
+    let (mut need, mut term, mut nom, mut val, mut def, mut next) = (9, 9, 9, 9, 9, f64::NAN);
+    a.ok(unsafe {
+        fmi3UpdateDiscreteStates(a.c, &mut need, &mut term, &mut nom, &mut val, &mut def, &mut next)
+    });
+    assert_eq!((need, term, def), (fmi3False, fmi3False, fmi3True));
+    assert_eq!(next, 0.85, "the law's end is a time event");
+    a.ok(unsafe { fmi3EnterContinuousTimeMode(a.c) });
+    let functions = common::callbacks(null_mut());
+    let name = CString::new("me2").unwrap();
+    let b = unsafe {
+        f2::fmi2Instantiate(name.as_ptr(), 0, token().as_ptr(), null(), &*functions, 0, 0)
+    };
+    assert!(!b.is_null());
+    unsafe {
+        assert_eq!(f2::fmi2SetInteger(b, &vr(Var::PhiSource), 1, &2), OK);
+        assert_eq!(f2::fmi2SetupExperiment(b, 1, 1e-6, 0.0, 0, 0.0), OK);
+        assert_eq!(f2::fmi2EnterInitializationMode(b), OK);
+        assert_eq!(f2::fmi2ExitInitializationMode(b), OK);
+        let mut info = std::mem::zeroed();
+        assert_eq!(f2::fmi2NewDiscreteStates(b, &mut info), OK);
+        assert_eq!(f2::fmi2EnterContinuousTimeMode(b), OK);
+    }
+    for (t, x) in [(0.3, [0.01, -0.02, 0.3, -0.1]), (0.6, [0.2, 0.1, -0.5, 0.4])] {
+        a.ok(unsafe { fmi3SetTime(a.c, t) });
+        a.ok(unsafe { fmi3SetContinuousStates(a.c, x.as_ptr(), 4) });
+        let mut d3 = [0.0; 4];
+        a.ok(unsafe { fmi3GetContinuousStateDerivatives(a.c, d3.as_mut_ptr(), 4) });
+        let mut d2 = [0.0; 4];
+        unsafe {
+            assert_eq!(f2::fmi2SetTime(b, t), OK);
+            assert_eq!(f2::fmi2SetContinuousStates(b, x.as_ptr(), 4), OK);
+            assert_eq!(f2::fmi2GetDerivatives(b, d2.as_mut_ptr(), 4), OK);
+        }
+        assert_eq!(d3.map(f64::to_bits), d2.map(f64::to_bits));
+        assert_eq!(d3[0], x[2]);
+        let mut z = [0.0; 2];
+        a.ok(unsafe { fmi3GetEventIndicators(a.c, z.as_mut_ptr(), 2) });
+        let (s, margins) = a.get_reals(&[Var::RangeMarginV1, Var::RangeMarginTheta1]);
+        a.ok(s);
+        assert_eq!(z.to_vec(), margins);
+        assert_eq!(z[1], PI / 2.0 - x[1].abs());
+        assert_eq!(a.real(Var::Time), t);
+        let (mut enter, mut stop) = (9, 9);
+        a.ok(unsafe { fmi3CompletedIntegratorStep(a.c, fmi3True, &mut enter, &mut stop) });
+        assert_eq!((enter, stop), (fmi3False, fmi3False));
+    }
+    // A directional derivative: d der(v1) / d dv1 = 1.
+    let (u, k, seed) = ([vr(Var::DerV1)], [vr(Var::Dv1)], [1.0]);
+    let mut out = [f64::NAN];
+    a.ok(unsafe {
+        fmi3GetDirectionalDerivative(
+            a.c,
+            u.as_ptr(),
+            1,
+            k.as_ptr(),
+            1,
+            seed.as_ptr(),
+            1,
+            out.as_mut_ptr(),
+            1,
+        )
+    });
+    assert!((out[0] - 1.0).abs() < 1e-8, "{out:?}");
+    unsafe { f2::fmi2FreeInstance(b) };
+}
+
+/// What the model does not provide returns fmi3Error with why; types without variables
+/// answer an empty request with OK and refuse any value reference naming its type.
+#[test]
+fn unprovided_functions_say_why() {
+    let h = Host::cs("unprovided");
+    h.ok(h.enter(None));
+    let calls: [(Probe, &str); 10] = [
+        (|c| unsafe { fmi3EnterConfigurationMode(c) }, "structural parameters"),
+        (|c| unsafe { fmi3ExitConfigurationMode(c) }, "structural parameters"),
+        (|c| unsafe { fmi3EvaluateDiscreteStates(c) }, "providesEvaluateDiscreteStates"),
+        (|c| unsafe { fmi3ActivateModelPartition(c, 0, 0.0) }, "scheduled execution"),
+        (|c| unsafe { fmi3GetShiftDecimal(c, null(), 0, null_mut()) }, "no clocks"),
+        (|c| unsafe { fmi3SetIntervalFraction(c, null(), 0, null(), null()) }, "no clocks"),
+        (
+            |c| unsafe {
+                fmi3GetAdjointDerivative(c, null(), 0, null(), 0, null(), 0, null_mut(), 0)
+            },
+            "providesAdjointDerivatives",
+        ),
+        (|c| unsafe { fmi3GetNumberOfVariableDependencies(c, 0, null_mut()) }, "dependencies"),
+        (|c| unsafe { fmi3EnterStepMode(c) }, "hasEventMode = false"),
+        (|c| unsafe { fmi3EnterEventMode(c) }, "hasEventMode = false"),
+    ];
+    for (call, why) in calls {
+        h.expect_error(call(h.c), &["not provided", why]);
+    }
+    let mut f = [0f32; 1];
+    h.ok(unsafe { fmi3GetFloat32(h.c, null(), 0, f.as_mut_ptr(), 0) });
+    let s = unsafe { fmi3GetFloat32(h.c, &vr(Var::L), 1, f.as_mut_ptr(), 1) };
+    h.expect_error(s, &["fmi3GetFloat32", "`l`", "a Float64 variable, not a Float32"]);
+    let s = unsafe { fmi3SetUInt8(h.c, &vr(Var::Formulation), 1, &1u8, 1) };
+    h.expect_error(s, &["fmi3SetUInt8", "an Int64 variable, not a UInt8"]);
+    let s = unsafe {
+        fmi3InstantiateScheduledExecution(
+            null(),
+            null(),
+            null(),
+            0,
+            0,
+            null_mut(),
+            None,
+            None,
+            None,
+            None,
+        )
+    };
+    assert!(s.is_null());
+}
+
+/// Enumerations are Int64; Int32 is the integers'; `nValues` must match.
+#[test]
+fn enumerations_are_int64_and_arrays_are_scalars() {
+    let h = Host::cs("enums");
+    h.ok(h.enter(None));
+    let mut k = 0i64;
+    h.ok(unsafe { fmi3GetInt64(h.c, &vr(Var::Formulation), 1, &mut k, 1) });
+    assert!(k >= 1);
+    h.ok(h.set_enum(Var::Formulation, 2));
+    h.ok(unsafe { fmi3GetInt64(h.c, &vr(Var::Formulation), 1, &mut k, 1) });
+    assert_eq!(k, 2);
+    let s = unsafe { fmi3SetInt32(h.c, &vr(Var::Formulation), 1, &2, 1) };
+    h.expect_error(s, &["fmi3SetInt32", "`formulation`", "an Int64 variable, not an Int32"]);
+    let s = h.set_enum(Var::Formulation, 1 << 40);
+    h.expect_error(s, &["fmi3SetInt64", "formulation"]);
+    let mut n = 0i32;
+    h.ok(unsafe { fmi3GetInt32(h.c, &vr(Var::MaxOrder), 1, &mut n, 1) });
+    assert!((1..=5).contains(&n));
+    let mut y = [0.0; 2];
+    let s = unsafe { fmi3GetFloat64(h.c, &vr(Var::L), 1, y.as_mut_ptr(), 2) };
+    h.expect_error(s, &["fmi3GetFloat64", "nValues = 2 with 1 value references"]);
+    let s = h.set_real(Var::Time, 1.0);
+    h.expect_error(s, &["fmi3SetFloat64", "`time`", "independent variable"]);
+    let s = h.set_real(Var::L, -1.0);
+    h.expect_error(s, &["fmi3SetFloat64", "`l`"]);
+}
+
+/// An FMI 2.0 instance takes no FMI 3.0 call, nor the reverse.
+#[test]
+fn versions_do_not_mix() {
+    use beam_body::fmi2::exports as f2;
+    let h = Host::cs("fmi3 instance");
+    h.ok(h.set_enum(Var::PhiSource, 2));
+    h.initialize();
+    let s = unsafe { f2::fmi2DoStep(h.c, 0.0, 0.01, 1) };
+    h.expect_error(s, &["fmi2DoStep", "made by fmi3Instantiate"]);
+    let functions = common::callbacks(null_mut());
+    let name = CString::new("fmi2 instance").unwrap();
+    let b = unsafe {
+        f2::fmi2Instantiate(name.as_ptr(), 1, token().as_ptr(), null(), &*functions, 0, 0)
+    };
+    assert_eq!(unsafe { fmi3Terminate(b) }, ERROR);
+    unsafe { f2::fmi2FreeInstance(b) };
+    h.steps(0.0, 0.01, 2);
+}
+
+/// The instantiate functions refuse a wrong token, event mode in co-simulation and required
+/// intermediate variables that cannot be, saying so; NULL names and callbacks do not crash.
+#[test]
+fn instantiation_refusals() {
+    let env = Box::<Env>::default();
+    let envp = &*env as *const Env as *mut c_void;
+    let name = CString::new("x").unwrap();
+    let bad = CString::new("{not-the-token}").unwrap();
+    let cs = |token: &CString, event: fmi3Boolean, required: &[u32]| unsafe {
+        fmi3InstantiateCoSimulation(
+            name.as_ptr(),
+            token.as_ptr(),
+            null(),
+            0,
+            0,
+            event,
+            0,
+            required.as_ptr(),
+            required.len(),
+            envp,
+            Some(log_message),
+            Some(intermediate_update),
+        )
+    };
+    let expect = |c: fmi3Instance, needle: &str| {
+        assert!(c.is_null());
+        let log = std::mem::take(&mut *env.log.borrow_mut());
+        assert!(
+            log.iter().any(|(s, _, m)| *s == ERROR && m.contains(needle)),
+            "{needle}: {log:#?}"
+        );
+    };
+    expect(cs(&bad, 0, &[]), "instantiationToken {not-the-token} does not match");
+    expect(cs(&token(), 1, &[]), "eventModeUsed = true");
+    expect(cs(&token(), 0, &[vr(Var::Dphi)]), "`dphi`");
+    expect(cs(&token(), 0, &[9999]), "unknown value reference 9999");
+    let me = unsafe {
+        fmi3InstantiateModelExchange(
+            null(),
+            token().as_ptr(),
+            null(),
+            0,
+            0,
+            envp,
+            Some(log_message),
+        )
+    };
+    expect(me, "instanceName is NULL");
+    let quiet = unsafe {
+        fmi3InstantiateModelExchange(name.as_ptr(), bad.as_ptr(), null(), 0, 0, null_mut(), None)
+    };
+    assert!(quiet.is_null());
+}
+
+/// NULL out-arguments and arrays are errors, not crashes.
+#[test]
+fn null_pointers_are_refused() {
+    let h = Host::cs("nulls");
+    h.ok(h.set_enum(Var::PhiSource, 2));
+    h.initialize();
+    let (mut a, mut b, mut t) = (0, 0, 0.0);
+    let s = unsafe { fmi3DoStep(h.c, 0.0, 0.01, 1, &mut a, &mut b, null_mut(), &mut t) };
+    h.expect_error(s, &["fmi3DoStep", "`earlyReturn` is NULL"]);
+    let s = unsafe { fmi3GetFloat64(h.c, &vr(Var::V1), 1, null_mut(), 1) };
+    h.expect_error(s, &["fmi3GetFloat64", "`value` is NULL"]);
+    let s = unsafe { fmi3GetOutputDerivatives(h.c, &vr(Var::V1), 1, null(), null_mut(), 1) };
+    h.expect_error(s, &["fmi3GetOutputDerivatives", "`orders` is NULL"]);
+    assert_eq!(
+        unsafe { fmi3DoStep(null_mut(), 0.0, 0.01, 1, &mut a, &mut b, &mut a, &mut t) },
+        ERROR
+    );
+    unsafe { fmi3FreeInstance(null_mut()) };
+    h.steps(0.0, 0.01, 1);
+}
+
+/// FMU states: serialized in the middle of a run, restored into another instance, the run
+/// continues bit for bit; output derivatives come with fmi3GetOutputDerivatives.
+#[test]
+fn fmu_states_continue_bit_for_bit() {
+    let a = Host::cs("a");
+    a.ok(a.set_enum(Var::PhiSource, 2));
+    a.initialize();
+    let t = a.steps(0.0, 0.02, 20);
+    let mut s = null_mut();
+    a.ok(unsafe { fmi3GetFMUState(a.c, &mut s) });
+    let mut size = 0;
+    a.ok(unsafe { fmi3SerializedFMUStateSize(a.c, s, &mut size) });
+    let mut bytes = vec![0u8; size];
+    a.ok(unsafe { fmi3SerializeFMUState(a.c, s, bytes.as_mut_ptr(), size) });
+    a.ok(unsafe { fmi3FreeFMUState(a.c, &mut s) });
+    assert!(s.is_null());
+    a.steps(t, 0.02, 10);
+    let end = a.get_reals(&MOTION).1;
+    let b = Host::cs("b");
+    let mut r = null_mut();
+    b.ok(unsafe { fmi3DeserializeFMUState(b.c, bytes.as_ptr(), size, &mut r) });
+    b.ok(unsafe { fmi3SetFMUState(b.c, r) });
+    b.steps(t, 0.02, 10);
+    assert_eq!(
+        b.get_reals(&MOTION).1.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+        end.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+    );
+    let (vrs, orders) = ([vr(Var::V1), vr(Var::V1)], [1, 2]);
+    let mut d = [0.0; 2];
+    b.ok(unsafe {
+        fmi3GetOutputDerivatives(b.c, vrs.as_ptr(), 2, orders.as_ptr(), d.as_mut_ptr(), 2)
+    });
+    assert_eq!(d[0], b.real(Var::Dv1));
+    // A Model Exchange instance refuses a co-simulation state.
+    let me = Host::me("me");
+    let st = unsafe { fmi3SetFMUState(me.c, r) };
+    me.expect_error(st, &["fmi3SetFMUState", "co-simulation"]);
 }

@@ -159,6 +159,22 @@ def fmu_file() -> Path:
 
 
 @pytest.fixture(scope="session")
+def fmu3_file() -> Path:
+    """The FMI 3.0 FMU: $BEAM_BODY_FMU_FMI3, else target/fmu/BeamBody-fmi3.fmu. Missing is a FAILURE,
+    not a skip."""
+    import fmu_util
+
+    path = fmu_util.fmu3_path()
+    if not path.is_file():
+        pytest.fail(
+            f"FMI 3.0 FMU not found at {path} (set BEAM_BODY_FMU_FMI3 or build it): run `cargo xtask fmu` "
+            "(it writes target/fmu/BeamBody-fmi3.fmu), then `cargo xtask test`",
+            pytrace=False,
+        )
+    return path
+
+
+@pytest.fixture(scope="session")
 def fmu_model_description(fmu_file):
     from fmpy import read_model_description
 

@@ -1,6 +1,7 @@
 """Helpers for the FMU tests (tests/python/fmu/test_fmu_*.py).
 
-- the FMU's path ($BEAM_BODY_FMU, else target/fmu/BeamBody.fmu);
+- the FMU's path ($BEAM_BODY_FMU, else target/fmu/BeamBody.fmu), and the FMI 3.0 FMU's
+  ($BEAM_BODY_FMU_FMI3, else target/fmu/BeamBody-fmi3.fmu);
 - the paper's law phi(t), evaluated with the same formula and operation order as the Rust model
   (src/model/phi.rs, PhiPiece::Turn / Hold), so that samples are bit-identical to the CLI's;
 - CLI runs (`beam-body simulate scenes/paper.toml --set ...`), cached per session;
@@ -30,6 +31,7 @@ REPO = Path(__file__).resolve().parents[2]
 TARGET = REPO / "target"
 FMU_REPORT_FILE = TARGET / "fmu-report.txt"
 MODEL_DESCRIPTION_XML = REPO / "modelDescription" / "modelDescription.xml"
+MODEL_DESCRIPTION3_XML = REPO / "modelDescription" / "fmi3" / "modelDescription.xml"
 PAPER_SCENE = REPO / "scenes" / "paper.toml"
 
 STATES = ("v1", "theta1", "u2")
@@ -54,6 +56,11 @@ FMI2_TERMINATED = 3
 def fmu_path() -> Path:
     env = os.environ.get("BEAM_BODY_FMU")
     return Path(env) if env else TARGET / "fmu" / "BeamBody.fmu"
+
+
+def fmu3_path() -> Path:
+    env = os.environ.get("BEAM_BODY_FMU_FMI3")
+    return Path(env) if env else TARGET / "fmu" / "BeamBody-fmi3.fmu"
 
 
 # --------------------------------------------------------------------------------------------------

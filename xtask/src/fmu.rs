@@ -1,20 +1,30 @@
 //! `cargo xtask fmu [--all-platforms]`: build, package and run the FMU.
 //!
-//! 1. Refuse a stale `modelDescription/modelDescription.xml` (regenerated in memory and
-//!    compared byte for byte).
+//! 1. Refuse a stale `modelDescription/modelDescription.xml` or
+//!    `modelDescription/fmi3/modelDescription.xml` (regenerated in memory and compared byte
+//!    for byte).
 //! 2. Run the paper's scene (`scenes/paper.toml`) through the standalone solver: the
 //!    reference, `target/fmu/paper.csv`.
 //! 3. Build the library as a cdylib for this machine, and with `--all-platforms` for every
 //!    platform ([`platforms`]).
-//! 4. Zip `target/fmu/BeamBody.fmu`:
+//! 4. Zip `target/fmu/BeamBody.fmu` (FMI 2.0):
 //!    ```text
-//!    modelDescription.xml
+//!    modelDescription.xml              (modelDescription/modelDescription.xml)
 //!    binaries/linux64/BeamBody.so      (this machine's build; with --all-platforms also
 //!                                       win64, darwin64, aarch64-darwin and aarch64-linux)
 //!    documentation/index.html          (generated from the interface tables)
 //!    ```
-//!    and, with `--all-platforms`, `target/fmu/BeamBody-aarch64-linux.fmu`. When the test
-//!    venv (`target/venv`) exists, FMPy's `validate_fmu` must find no problem in either.
+//!    and `target/fmu/BeamBody-fmi3.fmu` (FMI 3.0), the same libraries in FMI 3.0's folders:
+//!    ```text
+//!    modelDescription.xml              (modelDescription/fmi3/modelDescription.xml)
+//!    binaries/x86_64-linux/BeamBody.so (this machine's build; with --all-platforms also
+//!                                       x86_64-windows, x86_64-darwin, aarch64-darwin and
+//!                                       aarch64-linux)
+//!    documentation/index.html
+//!    ```
+//!    and, with `--all-platforms`, `target/fmu/BeamBody-aarch64-linux.fmu` (FMI 2.0). When the
+//!    test venv (`target/venv`) exists, FMPy's `validate_fmu` (FMI 2.0 and 3.0: the schema,
+//!    the variables, the model structure) must find no problem in any of them.
 //! 5. Extract it to `target/fmu/BeamBody/`, load this machine's library there with the
 //!    native host ([`crate::import`]), run the same scene through the FMI 2.0 API with the
 //!    built-in law and the DefaultExperiment (`target/fmu/paper_fmu.csv`), check that a
@@ -32,6 +42,7 @@ use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipArchive, ZipWriter};
 
 use crate::import::{Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
+use crate::model_description::Description;
 use crate::platforms::{self, Archive};
 use crate::summary::{sig, Table};
 use crate::{
@@ -44,16 +55,18 @@ const RECORDED: [Var; 3] = [Var::V1, Var::Theta1, Var::U2];
 
 /// The archives that [`build_package`] wrote.
 pub struct Packages {
-    /// `target/fmu/BeamBody.fmu`.
+    /// `target/fmu/BeamBody.fmu` (FMI 2.0).
     pub main: PathBuf,
-    /// `target/fmu/BeamBody-aarch64-linux.fmu`, with `--all-platforms`.
+    /// `target/fmu/BeamBody-aarch64-linux.fmu` (FMI 2.0), with `--all-platforms`.
     pub aarch64_linux: Option<PathBuf>,
+    /// `target/fmu/BeamBody-fmi3.fmu` (FMI 3.0).
+    pub fmi3: PathBuf,
     /// Each archive, with its binaries: (folder, size in bytes).
     listing: Vec<(PathBuf, Vec<(&'static str, u64)>)>,
 }
 
-/// Checks the modelDescription, builds the cdylib (with `all`, for every platform) and zips
-/// the archives of [`platforms::ARCHIVES`] (without `all`: [`platforms::HOST_ARCHIVE`]) into
+/// Checks the modelDescriptions, builds the cdylib (with `all`, for every platform) and zips
+/// the archives of [`platforms::ARCHIVES`] (without `all`: [`platforms::HOST_ARCHIVES`]) into
 /// `target/fmu/`.
 pub fn build_package(all: bool) -> Result<Packages> {
     build_package_in(&target_dir().join("fmu"), all)
@@ -66,8 +79,7 @@ pub fn build_package_in(out_dir: &Path, all: bool) -> Result<Packages> {
     fs::create_dir_all(out_dir)
         .map_err(|err| format!("cannot create {}: {err}", relative(out_dir)))?;
     let built = platforms::build(all)?;
-    let archives: &[Archive] =
-        if all { &platforms::ARCHIVES } else { std::slice::from_ref(&platforms::HOST_ARCHIVE) };
+    let archives: &[Archive] = if all { &platforms::ARCHIVES } else { &platforms::HOST_ARCHIVES };
     let mut listing = Vec::new();
     for archive in archives {
         let fmu = out_dir.join(archive.file);
@@ -75,16 +87,21 @@ pub fn build_package_in(out_dir: &Path, all: bool) -> Result<Packages> {
         for &(folder, source) in archive.binaries {
             binaries.push((folder, built.path(source)?));
         }
-        package(&binaries, &fmu)?;
+        package(archive.description, &binaries, &fmu)?;
         let sizes = binaries
             .iter()
             .map(|(folder, path)| (*folder, fs::metadata(path).map(|m| m.len()).unwrap_or(0)))
             .collect();
         listing.push((fmu, sizes));
     }
-    let main = listing[0].0.clone();
-    let aarch64_linux = listing.get(1).map(|(fmu, _)| fmu.clone());
-    Ok(Packages { main, aarch64_linux, listing })
+    let written = |file: &str| {
+        let path = out_dir.join(file);
+        listing.iter().any(|(fmu, _)| *fmu == path).then_some(path)
+    };
+    let main = written(platforms::MAIN_FILE).ok_or("no FMI 2.0 archive was written")?;
+    let fmi3 = written(platforms::FMI3_FILE).ok_or("no FMI 3.0 archive was written")?;
+    let aarch64_linux = written(platforms::AARCH64_LINUX_FILE);
+    Ok(Packages { main, aarch64_linux, fmi3, listing })
 }
 
 pub fn run(all: bool) -> Result {
@@ -143,12 +160,12 @@ fn run_standalone(out_dir: &Path) -> Result<PathBuf> {
     Ok(csv)
 }
 
-/// Writes the .fmu with `binaries` (folder under binaries/, library). Entries carry no
-/// timestamps (the zip crate's default date, 1980-01-01), so the same inputs give the same
-/// archive.
-fn package(binaries: &[(&str, &Path)], fmu: &Path) -> Result {
-    let model_description = fs::read(model_description::path())
-        .map_err(|err| format!("cannot read {}: {err}", model_description::RELATIVE_PATH))?;
+/// Writes the .fmu with `description` as its modelDescription.xml and `binaries` (folder under
+/// binaries/, library). Entries carry no timestamps (the zip crate's default date,
+/// 1980-01-01), so the same inputs give the same archive.
+fn package(description: &Description, binaries: &[(&str, &Path)], fmu: &Path) -> Result {
+    let model_description = fs::read(description.path())
+        .map_err(|err| format!("cannot read {}: {err}", description.relative_path))?;
     let mut libraries = Vec::new();
     for (folder, path) in binaries {
         let bytes =
@@ -183,8 +200,9 @@ fn package(binaries: &[(&str, &Path)], fmu: &Path) -> Result {
     Ok(())
 }
 
-/// `fmpy.validation.validate_fmu` on the .fmu (the schema, names, start values, causality and
-/// variability, units, ModelStructure) when the test venv exists; it must find nothing.
+/// `fmpy.validation.validate_fmu` on the .fmu (the schema of its FMI version, names, start
+/// values, causality and variability, units, ModelStructure; FMI 3.0: one independent variable,
+/// unique value references) when the test venv exists; it must find nothing.
 fn validate_with_fmpy(fmu: &Path) -> Result {
     let python = target_dir().join("venv").join("bin").join("python");
     if !python.exists() {

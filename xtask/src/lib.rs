@@ -11,6 +11,7 @@ pub mod fmu;
 pub mod fuzz;
 pub mod import;
 pub mod model_description;
+pub mod model_description3;
 pub mod platforms;
 pub mod progress;
 pub mod python;

@@ -17,25 +17,33 @@ Commands:
   test [--rust-only | --python-only]
           Run the whole test suite: set up the Python venv (target/venv),
           build the release binary, run the Rust tests and the Python tests.
-  gen     Write modelDescription/modelDescription.xml from the interface tables
-          (src/fmu/variables.rs). Commit the result; a test fails when it is stale.
+  gen     Write modelDescription/modelDescription.xml (FMI 2.0) and
+          modelDescription/fmi3/modelDescription.xml (FMI 3.0) from the interface
+          tables (src/fmu/variables.rs). Commit the result; a test fails when either
+          is stale.
   fmu [--all-platforms]
-          Build and check the FMU, target/fmu/BeamBody.fmu:
-          - refuse a stale modelDescription.xml;
+          Build and check the FMUs, target/fmu/BeamBody.fmu (FMI 2.0) and
+          target/fmu/BeamBody-fmi3.fmu (FMI 3.0):
+          - refuse a stale modelDescription.xml (either version);
           - run the paper's scene (scenes/paper.toml) through the standalone solver,
             the reference (target/fmu/paper.csv);
           - build the library (cargo rustc --release --lib --no-default-features
             --crate-type cdylib) and zip
             modelDescription.xml, binaries/linux64/BeamBody.so and
-            documentation/index.html;
+            documentation/index.html into BeamBody.fmu, and the FMI 3.0
+            modelDescription.xml, binaries/x86_64-linux/BeamBody.so (the same
+            library) and documentation/index.html into BeamBody-fmi3.fmu;
           - --all-platforms: also cross-build win64, macOS (x86_64 and arm64) and Linux
             aarch64 with Debian's Rust (installing the toolchains with apt-get as root),
             into BeamBody.fmu (binaries/win64, darwin64 universal, aarch64-darwin,
-            aarch64-linux) and target/fmu/BeamBody-aarch64-linux.fmu (the aarch64
-            library in binaries/linux64, where FMPy looks on Linux aarch64);
-          - validate it with FMPy when target/venv exists;
-          - extract it to target/fmu/BeamBody/, load the .so there with a native FMI 2.0
-            host, run the same scene through it (target/fmu/paper_fmu.csv) and compare.
+            aarch64-linux), BeamBody-fmi3.fmu (binaries/x86_64-windows, x86_64-darwin,
+            aarch64-darwin, aarch64-linux) and target/fmu/BeamBody-aarch64-linux.fmu
+            (the aarch64 library in binaries/linux64, where FMPy looks on Linux
+            aarch64);
+          - validate each archive with FMPy when target/venv exists;
+          - extract BeamBody.fmu to target/fmu/BeamBody/, load the .so there with a
+            native FMI 2.0 host, run the same scene through it
+            (target/fmu/paper_fmu.csv) and compare.
   bench [--quick]
           The work-precision benchmark (error against run time, target/bench/):
           - set up target/venv with bench/python/requirements-bench.txt, package the

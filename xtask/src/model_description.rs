@@ -1,7 +1,10 @@
-//! `cargo xtask gen`: `modelDescription/modelDescription.xml` from the interface tables in
-//! `beam_body::fmu::variables`, the single source of truth.
+//! `cargo xtask gen`: the model descriptions from the interface tables in
+//! `beam_body::fmu::variables`, the single source of truth: FMI 2.0's
+//! `modelDescription/modelDescription.xml` (this module) and FMI 3.0's
+//! `modelDescription/fmi3/modelDescription.xml` ([`crate::model_description3`]), which share
+//! the writer and the helpers here.
 //!
-//! The file is committed. Two tests keep it honest: it must equal what [`generate`] writes
+//! Both files are committed. Tests keep them honest: each must equal what its generator writes
 //! now, byte for byte, and read back with quick-xml it must say what the tables say.
 //! `cargo xtask fmu` refuses to package a stale file.
 
@@ -17,44 +20,84 @@ use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 
 use crate::xml::escape_attr;
-use crate::{project_root, relative, Result};
+use crate::{model_description3, project_root, relative, Result};
 
-/// The committed file, relative to the project root.
-pub const RELATIVE_PATH: &str = "modelDescription/modelDescription.xml";
-
-pub fn path() -> PathBuf {
-    project_root().join(RELATIVE_PATH)
+/// A committed model description: where it lives and what writes it.
+pub struct Description {
+    /// The file, relative to the project root.
+    pub relative_path: &'static str,
+    /// The whole file, from the tables.
+    pub generate: fn() -> Result<String>,
 }
 
-/// `cargo xtask gen`: the modelDescription, and README.md's variables table.
+/// FMI 2.0's modelDescription.xml (this module's [`generate`]).
+pub const FMI2: Description =
+    Description { relative_path: "modelDescription/modelDescription.xml", generate };
+/// FMI 3.0's modelDescription.xml ([`model_description3::generate`]).
+pub const FMI3: Description = Description {
+    relative_path: model_description3::RELATIVE_PATH,
+    generate: model_description3::generate,
+};
+/// Every description `cargo xtask gen` writes and `cargo xtask fmu` checks.
+pub const DESCRIPTIONS: [Description; 2] = [FMI2, FMI3];
+
+impl Description {
+    pub fn path(&self) -> PathBuf {
+        project_root().join(self.relative_path)
+    }
+
+    /// The error unless the committed file is exactly what the generator writes now.
+    pub fn check_fresh(&self) -> Result {
+        let expected = (self.generate)()?;
+        let path = self.path();
+        match fs::read_to_string(&path) {
+            Ok(actual) if actual == expected => Ok(()),
+            Ok(_) => Err(self.stale_message().into()),
+            Err(err) => {
+                Err(format!("cannot read {}: {err}; run `cargo xtask gen`", relative(&path)).into())
+            }
+        }
+    }
+
+    pub fn stale_message(&self) -> String {
+        format!("{} is stale: run `cargo xtask gen`", self.relative_path)
+    }
+
+    /// Writes the file if it changed.
+    fn update(&self) -> Result {
+        let text = (self.generate)()?;
+        let path = self.path();
+        let old = fs::read_to_string(&path).ok();
+        if old.as_deref() == Some(text.as_str()) {
+            println!("{} is up to date (guid {})", relative(&path), vars::guid());
+            return Ok(());
+        }
+        fs::create_dir_all(path.parent().expect("the path has a directory"))
+            .map_err(|err| format!("cannot create the directory of {}: {err}", relative(&path)))?;
+        fs::write(&path, &text)
+            .map_err(|err| format!("cannot write {}: {err}", relative(&path)))?;
+        let verb = if old.is_some() { "updated" } else { "created" };
+        println!("{verb} {} (guid {})", relative(&path), vars::guid());
+        Ok(())
+    }
+}
+
+/// `cargo xtask gen`: both model descriptions, and README.md's variables table.
 pub fn run() -> Result {
     update_readme()?;
-    let text = generate()?;
-    let path = path();
-    let old = fs::read_to_string(&path).ok();
-    if old.as_deref() == Some(text.as_str()) {
-        println!("{} is up to date (guid {})", relative(&path), vars::guid());
-        return Ok(());
+    for description in &DESCRIPTIONS {
+        description.update()?;
     }
-    fs::create_dir_all(path.parent().expect("the path has a directory"))
-        .map_err(|err| format!("cannot create the directory of {}: {err}", relative(&path)))?;
-    fs::write(&path, &text).map_err(|err| format!("cannot write {}: {err}", relative(&path)))?;
-    let verb = if old.is_some() { "updated" } else { "created" };
-    println!("{verb} {} (guid {})", relative(&path), vars::guid());
     Ok(())
 }
 
-/// The error unless the committed file is exactly what [`generate`] writes now.
+/// The error unless every committed model description is exactly what its generator writes
+/// now.
 pub fn check_fresh() -> Result {
-    let expected = generate()?;
-    let path = path();
-    match fs::read_to_string(&path) {
-        Ok(actual) if actual == expected => Ok(()),
-        Ok(_) => Err(stale_message().into()),
-        Err(err) => {
-            Err(format!("cannot read {}: {err}; run `cargo xtask gen`", relative(&path)).into())
-        }
+    for description in &DESCRIPTIONS {
+        description.check_fresh()?;
     }
+    Ok(())
 }
 
 /// Rewrites README.md's generated variables table if it changed.
@@ -72,10 +115,6 @@ fn update_readme() -> Result {
     Ok(())
 }
 
-pub fn stale_message() -> String {
-    format!("{RELATIVE_PATH} is stale: run `cargo xtask gen`")
-}
-
 /// A real as the XML writes it: the shortest decimal string that parses back to the same
 /// f64 (xs:double accepts both forms): Rust's `Display` ("0.000001", "3.141592653589793")
 /// for ordinary magnitudes, the exponent form ("2.2250738585072014e-308", the `min` of a
@@ -90,17 +129,18 @@ pub fn real(x: f64) -> Result<String> {
     }
 }
 
-fn boolean(b: bool) -> String {
+pub(crate) fn boolean(b: bool) -> String {
     b.to_string()
 }
 
-/// `initial` as FMI 2.0 requires it for each causality of ours: parameters are exact (with a
-/// start), outputs and the derivatives (locals) are calculated (no start), and the continuous
-/// inputs have none (their start is implicitly approx).
+/// `initial` as FMI 2.0 and 3.0 require it for each causality of ours: parameters are exact
+/// (with a start), outputs and locals are calculated (no start), and the continuous inputs and
+/// the independent variable have none (an input's start is implicitly approx in FMI 2.0, exact
+/// in FMI 3.0; the independent variable must not have one).
 pub fn initial(causality: Causality) -> Option<&'static str> {
     match causality {
         Causality::Parameter => Some("exact"),
-        Causality::Input => None,
+        Causality::Input | Causality::Independent => None,
         Causality::Output | Causality::Local => Some("calculated"),
     }
 }
@@ -111,6 +151,7 @@ pub fn causality_name(causality: Causality) -> &'static str {
         Causality::Input => "input",
         Causality::Output => "output",
         Causality::Local => "local",
+        Causality::Independent => "independent",
     }
 }
 
@@ -132,17 +173,26 @@ pub fn derivative_indices() -> Vec<usize> {
 }
 
 /// The 1-based indices of the variables computed at initialization (`initial` =
-/// calculated): the outputs, the states among them, and the derivatives, in index order.
+/// calculated): the outputs, the states among them, and the derivatives, in index order
+/// (FMI 2.0 §2.2.8 lists no other locals).
 pub fn initial_unknown_indices() -> Vec<usize> {
-    indices(|v| initial(v.causality) == Some("calculated"))
+    indices(is_initial_unknown)
+}
+
+/// Whether `<ModelStructure>` lists the variable among the initial unknowns: the outputs
+/// (the states are outputs) and the state derivatives, all calculated. Neither FMI 2.0 nor
+/// FMI 3.0 lists other locals there (FMI 3.0 §2.4.8 forbids the event indicators).
+pub(crate) fn is_initial_unknown(v: &Variable) -> bool {
+    v.causality == Causality::Output || v.derivative_of.is_some()
 }
 
 fn indices(keep: impl Fn(&Variable) -> bool) -> Vec<usize> {
     VARIABLES.iter().enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
 }
 
-/// The rules the tables must follow for the XML to be valid FMI 2.0, checked before writing.
-fn check_rules(v: &Variable) -> Result {
+/// The rules the tables must follow for the XML to be valid FMI 2.0 and 3.0, checked before
+/// writing.
+pub(crate) fn check_rules(v: &Variable) -> Result {
     let has_start = match v.ty {
         Type::Real { start, .. } => start.is_some(),
         _ => true,
@@ -162,11 +212,20 @@ fn check_rules(v: &Variable) -> Result {
         (Causality::Output, _, _) => {
             Some("an output must be continuous and have no start value (initial = calculated)")
         }
-        (Causality::Local, Variability::Continuous, false) if v.derivative_of.is_some() => None,
-        (Causality::Local, _, _) => Some(
-            "a local is a state derivative: continuous, with no start value, derivative of a \
-             state",
-        ),
+        (Causality::Local, Variability::Continuous, false) => match v.ty {
+            Type::Real { .. } => None,
+            _ => Some("a local is a continuous Real"),
+        },
+        (Causality::Local, _, _) => {
+            Some("a local is calculated: continuous, with no start value (initial = calculated)")
+        }
+        (Causality::Independent, Variability::Continuous, false) => match v.ty {
+            Type::Real { .. } => None,
+            _ => Some("the independent variable is a Real"),
+        },
+        (Causality::Independent, _, _) => {
+            Some("the independent variable is continuous and has no start value")
+        }
     };
     match problem {
         None => Ok(()),
@@ -175,16 +234,19 @@ fn check_rules(v: &Variable) -> Result {
 }
 
 /// Attributes, in the order they are written; values unescaped.
-type Attrs = Vec<(&'static str, String)>;
+pub(crate) type Attrs = Vec<(&'static str, String)>;
 
 /// quick-xml's indenting writer with attribute lists.
-struct Doc {
+pub(crate) struct Doc {
     writer: Writer<Vec<u8>>,
 }
 
 impl Doc {
-    fn new() -> Doc {
-        Doc { writer: Writer::new_with_indent(Vec::new(), b' ', 2) }
+    /// A document that starts with the XML declaration (UTF-8, as FMI requires).
+    pub(crate) fn new() -> Doc {
+        let mut doc = Doc { writer: Writer::new_with_indent(Vec::new(), b' ', 2) };
+        doc.event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)));
+        doc
     }
 
     fn start_tag<'a>(name: &'a str, attrs: &Attrs) -> BytesStart<'a> {
@@ -200,19 +262,19 @@ impl Doc {
         self.writer.write_event(event).expect("writing XML into memory");
     }
 
-    fn empty(&mut self, name: &str, attrs: Attrs) {
+    pub(crate) fn empty(&mut self, name: &str, attrs: Attrs) {
         self.event(Event::Empty(Doc::start_tag(name, &attrs)));
     }
 
-    fn start(&mut self, name: &str, attrs: Attrs) {
+    pub(crate) fn start(&mut self, name: &str, attrs: Attrs) {
         self.event(Event::Start(Doc::start_tag(name, &attrs)));
     }
 
-    fn end(&mut self, name: &str) {
+    pub(crate) fn end(&mut self, name: &str) {
         self.event(Event::End(BytesEnd::new(name)));
     }
 
-    fn finish(self) -> String {
+    pub(crate) fn finish(self) -> String {
         let mut bytes = self.writer.into_inner();
         bytes.push(b'\n');
         String::from_utf8(bytes).expect("the XML is built from UTF-8 strings")
@@ -239,26 +301,123 @@ fn shared_flags(provides_directional_derivative: bool) -> Attrs {
     ]
 }
 
-/// The whole modelDescription.xml.
+/// `<fmiModelDescription>`'s attributes: `fmiVersion`, and the GUID under the name of the
+/// version (`guid`, `instantiationToken`), then the model's names, the same in every version.
+pub(crate) fn header(fmi_version: &str, guid_attribute: &'static str) -> Attrs {
+    vec![
+        ("fmiVersion", fmi_version.into()),
+        ("modelName", vars::MODEL_NAME.into()),
+        (guid_attribute, vars::guid().into()),
+        ("description", vars::MODEL_DESCRIPTION.into()),
+        ("version", vars::MODEL_VERSION.into()),
+        ("generationTool", vars::GENERATION_TOOL.into()),
+        ("variableNamingConvention", "flat".into()),
+    ]
+}
+
+/// `<UnitDefinitions>`, the same in FMI 2.0 and 3.0.
+pub(crate) fn write_units(doc: &mut Doc) {
+    doc.start("UnitDefinitions", vec![]);
+    for unit in UNITS {
+        doc.start("Unit", vec![("name", unit.name.into())]);
+        let exponents = [("kg", unit.kg), ("m", unit.m), ("s", unit.s), ("rad", unit.rad)];
+        doc.empty(
+            "BaseUnit",
+            exponents.iter().filter(|(_, e)| *e != 0).map(|(k, e)| (*k, e.to_string())).collect(),
+        );
+        doc.end("Unit");
+    }
+    doc.end("UnitDefinitions");
+}
+
+/// The `<Item>`s of an enumeration type, 1-based, the same in FMI 2.0 and 3.0.
+pub(crate) fn write_items(doc: &mut Doc, ty: &EnumType) {
+    for (k, (name, description)) in ty.items.iter().enumerate() {
+        doc.empty(
+            "Item",
+            vec![
+                ("name", name.to_string()),
+                ("value", (k + 1).to_string()),
+                ("description", description.to_string()),
+            ],
+        );
+    }
+}
+
+/// `<LogCategories>` and `<DefaultExperiment>`, the same in FMI 2.0 and 3.0.
+pub(crate) fn write_categories_and_experiment(doc: &mut Doc) -> Result {
+    doc.start("LogCategories", vec![]);
+    for (name, description) in LOG_CATEGORIES {
+        doc.empty(
+            "Category",
+            vec![("name", name.to_string()), ("description", description.to_string())],
+        );
+    }
+    doc.end("LogCategories");
+
+    let ex = DEFAULT_EXPERIMENT;
+    doc.empty(
+        "DefaultExperiment",
+        vec![
+            ("startTime", real(ex.start_time)?),
+            ("stopTime", real(ex.stop_time)?),
+            ("tolerance", real(ex.tolerance)?),
+            ("stepSize", real(ex.step_size)?),
+        ],
+    );
+    Ok(())
+}
+
+/// A variable's attributes that both versions write first: name, value reference,
+/// description, causality and variability.
+pub(crate) fn variable_attrs(v: &Variable) -> Attrs {
+    vec![
+        ("name", v.name.into()),
+        ("valueReference", v.vr().to_string()),
+        ("description", v.description.into()),
+        ("causality", causality_name(v.causality).into()),
+        ("variability", variability_name(v.variability).into()),
+    ]
+}
+
+/// A real's unit, start, min and max (those it has), as both versions write them.
+pub(crate) fn real_attrs(
+    unit: Option<&'static str>,
+    start: Option<f64>,
+    min: Option<f64>,
+    max: Option<f64>,
+) -> Result<Attrs> {
+    let mut attrs: Attrs = Vec::new();
+    if let Some(unit) = unit {
+        attrs.push(("unit", unit.into()));
+    }
+    for (key, value) in [("start", start), ("min", min), ("max", max)] {
+        if let Some(value) = value {
+            attrs.push((key, real(value)?));
+        }
+    }
+    Ok(attrs)
+}
+
+/// An integer's start, min and max.
+pub(crate) fn integer_attrs(start: i32, min: i32, max: i32) -> Attrs {
+    vec![("start", start.to_string()), ("min", min.to_string()), ("max", max.to_string())]
+}
+
+/// An enumeration's type and start (its 1-based item).
+pub(crate) fn enumeration_attrs(ty: &EnumType, start: i32) -> Attrs {
+    vec![("declaredType", ty.name.into()), ("start", start.to_string())]
+}
+
+/// The whole FMI 2.0 modelDescription.xml.
 pub fn generate() -> Result<String> {
     for v in VARIABLES {
         check_rules(v)?;
     }
     let mut doc = Doc::new();
-    doc.event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)));
-    doc.start(
-        "fmiModelDescription",
-        vec![
-            ("fmiVersion", "2.0".into()),
-            ("modelName", vars::MODEL_NAME.into()),
-            ("guid", vars::guid().into()),
-            ("description", vars::MODEL_DESCRIPTION.into()),
-            ("version", vars::MODEL_VERSION.into()),
-            ("generationTool", vars::GENERATION_TOOL.into()),
-            ("variableNamingConvention", "flat".into()),
-            ("numberOfEventIndicators", EVENT_INDICATORS.to_string()),
-        ],
-    );
+    let mut attrs = header("2.0", "guid");
+    attrs.push(("numberOfEventIndicators", EVENT_INDICATORS.to_string()));
+    doc.start("fmiModelDescription", attrs);
 
     let me = EXCHANGE_CAPABILITIES;
     doc.empty(
@@ -293,43 +452,22 @@ pub fn generate() -> Result<String> {
     attrs.extend(shared_flags(caps.provides_directional_derivative));
     doc.empty("CoSimulation", attrs);
 
-    doc.start("UnitDefinitions", vec![]);
-    for unit in UNITS {
-        doc.start("Unit", vec![("name", unit.name.into())]);
-        let exponents = [("kg", unit.kg), ("m", unit.m), ("s", unit.s), ("rad", unit.rad)];
-        doc.empty(
-            "BaseUnit",
-            exponents.iter().filter(|(_, e)| *e != 0).map(|(k, e)| (*k, e.to_string())).collect(),
-        );
-        doc.end("Unit");
-    }
-    doc.end("UnitDefinitions");
+    write_units(&mut doc);
 
     doc.start("TypeDefinitions", vec![]);
     for ty in ENUM_TYPES {
-        write_enum_type(&mut doc, ty);
+        doc.start(
+            "SimpleType",
+            vec![("name", ty.name.into()), ("description", ty.description.into())],
+        );
+        doc.start("Enumeration", vec![]);
+        write_items(&mut doc, ty);
+        doc.end("Enumeration");
+        doc.end("SimpleType");
     }
     doc.end("TypeDefinitions");
 
-    doc.start("LogCategories", vec![]);
-    for (name, description) in LOG_CATEGORIES {
-        doc.empty(
-            "Category",
-            vec![("name", name.to_string()), ("description", description.to_string())],
-        );
-    }
-    doc.end("LogCategories");
-
-    let ex = DEFAULT_EXPERIMENT;
-    doc.empty(
-        "DefaultExperiment",
-        vec![
-            ("startTime", real(ex.start_time)?),
-            ("stopTime", real(ex.stop_time)?),
-            ("tolerance", real(ex.tolerance)?),
-            ("stepSize", real(ex.step_size)?),
-        ],
-    );
+    write_categories_and_experiment(&mut doc)?;
 
     doc.start("ModelVariables", vec![]);
     for v in VARIABLES {
@@ -355,60 +493,23 @@ pub fn generate() -> Result<String> {
     Ok(doc.finish())
 }
 
-fn write_enum_type(doc: &mut Doc, ty: &EnumType) {
-    doc.start("SimpleType", vec![("name", ty.name.into()), ("description", ty.description.into())]);
-    doc.start("Enumeration", vec![]);
-    for (k, (name, description)) in ty.items.iter().enumerate() {
-        doc.empty(
-            "Item",
-            vec![
-                ("name", name.to_string()),
-                ("value", (k + 1).to_string()),
-                ("description", description.to_string()),
-            ],
-        );
-    }
-    doc.end("Enumeration");
-    doc.end("SimpleType");
-}
-
 fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
-    let mut attrs: Attrs = vec![
-        ("name", v.name.into()),
-        ("valueReference", v.vr().to_string()),
-        ("description", v.description.into()),
-        ("causality", causality_name(v.causality).into()),
-        ("variability", variability_name(v.variability).into()),
-    ];
+    let mut attrs = variable_attrs(v);
     if let Some(initial) = initial(v.causality) {
         attrs.push(("initial", initial.into()));
     }
     doc.start("ScalarVariable", attrs);
     match v.ty {
         Type::Real { unit, start, min, max } => {
-            let mut attrs: Attrs = Vec::new();
-            if let Some(unit) = unit {
-                attrs.push(("unit", unit.into()));
-            }
-            for (key, value) in [("start", start), ("min", min), ("max", max)] {
-                if let Some(value) = value {
-                    attrs.push((key, real(value)?));
-                }
-            }
+            let mut attrs = real_attrs(unit, start, min, max)?;
             if let Some(state) = v.derivative_of {
                 // The state's 1-based index in <ModelVariables>: its value reference + 1.
                 attrs.push(("derivative", (state + 1).to_string()));
             }
             doc.empty("Real", attrs);
         }
-        Type::Integer { start, min, max } => doc.empty(
-            "Integer",
-            vec![("start", start.to_string()), ("min", min.to_string()), ("max", max.to_string())],
-        ),
-        Type::Enumeration { ty, start } => doc.empty(
-            "Enumeration",
-            vec![("declaredType", ty.name.into()), ("start", start.to_string())],
-        ),
+        Type::Integer { start, min, max } => doc.empty("Integer", integer_attrs(start, min, max)),
+        Type::Enumeration { ty, start } => doc.empty("Enumeration", enumeration_attrs(ty, start)),
         Type::Boolean { start } => doc.empty("Boolean", vec![("start", boolean(start))]),
     }
     doc.end("ScalarVariable");
@@ -416,7 +517,7 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     //! The committed file against the tables. The parse-back test reads the file with its own
     //! reader and compares with the tables directly, not with the generator's code.
 
@@ -428,22 +529,29 @@ mod tests {
         EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS, VARIABLES,
     };
 
-    use super::{generate, path, real, stale_message};
+    use super::{generate, real, Description, FMI2};
     use crate::xml::Element;
 
-    fn committed() -> String {
-        let path = path();
+    /// The committed text of `description`.
+    pub(crate) fn committed(description: &Description) -> String {
+        let path = description.path();
         fs::read_to_string(&path).unwrap_or_else(|err| {
             panic!("cannot read {}: {err}; run `cargo xtask gen`", path.display())
         })
     }
 
+    /// The root element of the committed `description`.
+    pub(crate) fn root_of(description: &Description) -> Element {
+        Element::parse(&committed(description))
+            .unwrap_or_else(|err| panic!("{} does not parse: {err}", description.relative_path))
+    }
+
     fn root() -> Element {
-        Element::parse(&committed()).expect("the committed modelDescription.xml parses")
+        root_of(&FMI2)
     }
 
     /// The attributes of `e` as a map; fails on an attribute outside `allowed`.
-    fn attrs<'a>(e: &'a Element, allowed: &[&str]) -> HashMap<&'a str, &'a str> {
+    pub(crate) fn attrs<'a>(e: &'a Element, allowed: &[&str]) -> HashMap<&'a str, &'a str> {
         for (key, _) in &e.attrs {
             assert!(
                 allowed.contains(&key.as_str()),
@@ -454,7 +562,7 @@ mod tests {
         e.attrs.iter().map(|(k, v)| (k.as_str(), v.as_str())).collect()
     }
 
-    fn f64_of(text: &str) -> f64 {
+    pub(crate) fn f64_of(text: &str) -> f64 {
         text.parse().unwrap_or_else(|err| panic!("{text:?} is not a double: {err}"))
     }
 
@@ -470,8 +578,8 @@ mod tests {
     #[test]
     fn committed_file_is_fresh() {
         let expected = generate().expect("the tables follow the FMI rules");
-        if committed() != expected {
-            panic!("{}", stale_message());
+        if committed(&FMI2) != expected {
+            panic!("{}", FMI2.stale_message());
         }
     }
 
@@ -686,6 +794,7 @@ mod tests {
                 Causality::Input => ("input", "continuous", None),
                 Causality::Output => ("output", "continuous", Some("calculated")),
                 Causality::Local => ("local", "continuous", Some("calculated")),
+                Causality::Independent => ("independent", "continuous", None),
             };
             assert_eq!(a["causality"], causality, "{}", at("causality"));
             assert_eq!(a["variability"], variability, "{}", at("variability"));
@@ -712,7 +821,7 @@ mod tests {
                         assert_eq!(written, value.map(f64::to_bits), "{}", at(key));
                     }
                     match v.causality {
-                        Causality::Output | Causality::Local => {
+                        Causality::Output | Causality::Local | Causality::Independent => {
                             assert!(start.is_none(), "{}", at("start"))
                         }
                         _ => assert!(start.is_some(), "{}", at("start")),
@@ -753,8 +862,8 @@ mod tests {
             VARIABLES.iter().enumerate().filter(|(_, v)| keep(v)).map(|(r, _)| r + 1).collect()
         };
         let outputs = rows(&|v| v.causality == Causality::Output);
-        let derivatives = rows(&|v| v.causality == Causality::Local);
-        let unknowns = rows(&|v| matches!(v.causality, Causality::Output | Causality::Local));
+        let derivatives = rows(&|v| v.derivative_of.is_some());
+        let unknowns = rows(&|v| v.causality == Causality::Output || v.derivative_of.is_some());
         assert_eq!(derivatives.len(), vars::DERIVATIVES.len());
         let structure = root.child("ModelStructure").unwrap();
         let names: Vec<&str> = structure.children.iter().map(|c| c.name.as_str()).collect();

@@ -9,13 +9,19 @@
 //!   aarch64 cross gcc (Linux aarch64) and lld's ld64 against a `libSystem.tbd` stub taken from
 //!   the `ziglang` wheel on PyPI (macOS).
 //!
-//! The archives and their folders ([`ARCHIVES`]) follow FMI 2.0.4 §2.3 (win64, linux64 and
-//! darwin64 are 64-bit x86; other platforms use FMI 3.0's platform tuples), with two
-//! concessions to the hosts that exist, which look in the FMI 2.0 folders on every
-//! architecture: darwin64 holds a universal binary, so that FMPy on an Apple-silicon Mac finds
-//! its arm64 slice there, and Linux aarch64 gets a second archive whose linux64 holds the
-//! aarch64 binary (an ELF file has one architecture, so one archive cannot serve both Linux
-//! architectures from linux64). ARCHITECTURE.md says why.
+//! The archives and their folders ([`ARCHIVES`]):
+//!
+//! - `BeamBody.fmu`, FMI 2.0: folders as FMI 2.0.4 §2.3 has them (win64, linux64 and darwin64
+//!   are 64-bit x86; other platforms use FMI 3.0's platform tuples), with two concessions to
+//!   the hosts that exist, which look in the FMI 2.0 folders on every architecture: darwin64
+//!   holds a universal binary, so that FMPy on an Apple-silicon Mac finds its arm64 slice there,
+//!   and Linux aarch64 gets a second archive, `BeamBody-aarch64-linux.fmu`, whose linux64 holds
+//!   the aarch64 binary (an ELF file has one architecture, so one archive cannot serve both
+//!   Linux architectures from linux64). ARCHITECTURE.md says why.
+//! - `BeamBody-fmi3.fmu`, FMI 3.0 (its own modelDescription.xml): the same libraries, which
+//!   export the fmi2 and the fmi3 functions, in folders named by FMI 3.0's platform tuples:
+//!   x86_64-linux, x86_64-windows, x86_64-darwin (the x86_64 build, not the universal one),
+//!   aarch64-darwin and aarch64-linux, one folder per architecture, so one archive serves all.
 
 use std::fs;
 use std::io::Read as _;
@@ -25,10 +31,13 @@ use std::time::Instant;
 
 use beam_body::fmu::variables::MODEL_IDENTIFIER;
 
+use crate::model_description::{self, Description};
 use crate::{cargo, project_root, relative, run_cmd, system, target_dir, Result};
 
-/// The `binaries/` folder of the host build (the machine xtask runs on).
+/// The FMI 2.0 `binaries/` folder of the host build (the machine xtask runs on).
 pub const HOST_FOLDER: &str = host_folder();
+/// The FMI 3.0 `binaries/` folder (platform tuple) of the host build.
+pub const HOST_TUPLE: &str = host_tuple();
 
 const fn host_folder() -> &'static str {
     if cfg!(all(target_os = "linux", target_arch = "x86_64")) {
@@ -37,6 +46,22 @@ const fn host_folder() -> &'static str {
         "win64"
     } else if cfg!(target_os = "macos") {
         "darwin64"
+    } else if cfg!(all(target_os = "linux", target_arch = "aarch64")) {
+        "aarch64-linux"
+    } else {
+        "unknown"
+    }
+}
+
+const fn host_tuple() -> &'static str {
+    if cfg!(all(target_os = "linux", target_arch = "x86_64")) {
+        "x86_64-linux"
+    } else if cfg!(all(target_os = "windows", target_arch = "x86_64")) {
+        "x86_64-windows"
+    } else if cfg!(all(target_os = "macos", target_arch = "x86_64")) {
+        "x86_64-darwin"
+    } else if cfg!(all(target_os = "macos", target_arch = "aarch64")) {
+        "aarch64-darwin"
     } else if cfg!(all(target_os = "linux", target_arch = "aarch64")) {
         "aarch64-linux"
     } else {
@@ -115,17 +140,27 @@ pub enum Source {
     MacUniversal,
 }
 
-/// An archive: its file name under target/fmu/ and its binaries (folder under binaries/,
-/// source).
+/// An archive: its file name under target/fmu/, its modelDescription.xml and its binaries
+/// (folder under binaries/, source).
 pub struct Archive {
     pub file: &'static str,
+    pub description: &'static Description,
     pub binaries: &'static [(&'static str, Source)],
 }
 
-/// The FMU for every desktop platform, and the one for FMI 2.0 hosts on Linux aarch64.
-pub const ARCHIVES: [Archive; 2] = [
+/// The FMI 2.0 FMU for every desktop platform.
+pub const MAIN_FILE: &str = "BeamBody.fmu";
+/// The FMI 2.0 FMU for hosts on Linux aarch64.
+pub const AARCH64_LINUX_FILE: &str = "BeamBody-aarch64-linux.fmu";
+/// The FMI 3.0 FMU for every desktop platform.
+pub const FMI3_FILE: &str = "BeamBody-fmi3.fmu";
+
+/// The FMI 2.0 FMU for every desktop platform, the one for FMI 2.0 hosts on Linux aarch64,
+/// and the FMI 3.0 FMU.
+pub const ARCHIVES: [Archive; 3] = [
     Archive {
-        file: "BeamBody.fmu",
+        file: MAIN_FILE,
+        description: &model_description::FMI2,
         binaries: &[
             ("linux64", Source::Host),
             ("win64", Source::Cross(Cross::Win64)),
@@ -135,17 +170,39 @@ pub const ARCHIVES: [Archive; 2] = [
         ],
     },
     Archive {
-        file: "BeamBody-aarch64-linux.fmu",
+        file: AARCH64_LINUX_FILE,
+        description: &model_description::FMI2,
         binaries: &[
             ("linux64", Source::Cross(Cross::LinuxAarch64)),
             ("aarch64-linux", Source::Cross(Cross::LinuxAarch64)),
         ],
     },
+    Archive {
+        file: FMI3_FILE,
+        description: &model_description::FMI3,
+        binaries: &[
+            ("x86_64-linux", Source::Host),
+            ("x86_64-windows", Source::Cross(Cross::Win64)),
+            ("x86_64-darwin", Source::Cross(Cross::MacX86_64)),
+            ("aarch64-darwin", Source::Cross(Cross::MacArm64)),
+            ("aarch64-linux", Source::Cross(Cross::LinuxAarch64)),
+        ],
+    },
 ];
 
-/// The host-only archive of `cargo xtask fmu`.
-pub const HOST_ARCHIVE: Archive =
-    Archive { file: "BeamBody.fmu", binaries: &[(HOST_FOLDER, Source::Host)] };
+/// The host-only archives of `cargo xtask fmu`: FMI 2.0 and FMI 3.0.
+pub const HOST_ARCHIVES: [Archive; 2] = [
+    Archive {
+        file: MAIN_FILE,
+        description: &model_description::FMI2,
+        binaries: &[(HOST_FOLDER, Source::Host)],
+    },
+    Archive {
+        file: FMI3_FILE,
+        description: &model_description::FMI3,
+        binaries: &[(HOST_TUPLE, Source::Host)],
+    },
+];
 
 /// The shared-library file name in a `binaries/` folder.
 pub fn library_name(folder: &str) -> String {
@@ -403,11 +460,43 @@ mod tests {
         assert_eq!(library_name("win64"), "BeamBody.dll");
         assert_eq!(library_name("darwin64"), "BeamBody.dylib");
         assert_eq!(library_name("aarch64-darwin"), "BeamBody.dylib");
+        assert_eq!(library_name("x86_64-linux"), "BeamBody.so");
+        assert_eq!(library_name("x86_64-windows"), "BeamBody.dll");
+        assert_eq!(library_name("x86_64-darwin"), "BeamBody.dylib");
+    }
+
+    /// The FMI 3.0 archive: its own modelDescription, one platform tuple per architecture, a
+    /// thin binary in each (no universal one), and every library the FMI 2.0 archive carries.
+    #[test]
+    fn the_fmi3_archive_has_every_platform_in_its_tuple() {
+        let fmi3 = ARCHIVES.iter().find(|a| a.file == FMI3_FILE).unwrap();
+        assert_eq!(fmi3.description.relative_path, model_description::FMI3.relative_path);
+        let expected = [
+            ("x86_64-linux", Source::Host),
+            ("x86_64-windows", Source::Cross(Cross::Win64)),
+            ("x86_64-darwin", Source::Cross(Cross::MacX86_64)),
+            ("aarch64-darwin", Source::Cross(Cross::MacArm64)),
+            ("aarch64-linux", Source::Cross(Cross::LinuxAarch64)),
+        ];
+        assert_eq!(fmi3.binaries, expected);
+        for archive in ARCHIVES.iter().filter(|a| a.file != FMI3_FILE) {
+            assert_eq!(archive.description.relative_path, model_description::FMI2.relative_path);
+        }
+        let host: Vec<_> =
+            HOST_ARCHIVES.iter().map(|a| (a.file, a.description.relative_path)).collect();
+        assert_eq!(
+            host,
+            [
+                (MAIN_FILE, model_description::FMI2.relative_path),
+                (FMI3_FILE, model_description::FMI3.relative_path)
+            ]
+        );
+        assert_eq!(HOST_ARCHIVES[1].binaries, [(HOST_TUPLE, Source::Host)]);
     }
 
     #[test]
     fn every_archive_binary_has_a_distinct_folder() {
-        for archive in ARCHIVES {
+        for archive in ARCHIVES.iter().chain(&HOST_ARCHIVES) {
             let mut folders: Vec<_> = archive.binaries.iter().map(|(f, _)| *f).collect();
             folders.sort_unstable();
             folders.dedup();
