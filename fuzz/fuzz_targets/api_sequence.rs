@@ -10,42 +10,9 @@ use beam_body::fmi::{
 };
 use beam_body::fmi2::{Core, Instance};
 use beam_body::fmu::variables::LOG_CATEGORIES;
-use beam_body_fuzz::{check_outputs, check_status, instance_of, Records};
+use beam_body_fuzz::{check_outputs, check_status, instance_of, Num, Records};
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
-
-/// A number, biased towards the values that matter at boundaries.
-#[derive(Arbitrary, Clone, Copy, Debug)]
-enum Num {
-    Zero,
-    One,
-    MinusOne,
-    Nan,
-    Inf,
-    NegInf,
-    Tiny,
-    Huge,
-    /// k/100: the ordinary range of the parameters and of communication steps.
-    Hundredths(i16),
-    Raw(f64),
-}
-
-impl Num {
-    fn value(self) -> f64 {
-        match self {
-            Num::Zero => 0.0,
-            Num::One => 1.0,
-            Num::MinusOne => -1.0,
-            Num::Nan => f64::NAN,
-            Num::Inf => f64::INFINITY,
-            Num::NegInf => f64::NEG_INFINITY,
-            Num::Tiny => 1e-300,
-            Num::Huge => 1e300,
-            Num::Hundredths(k) => f64::from(k) / 100.0,
-            Num::Raw(x) => x,
-        }
-    }
-}
 
 #[derive(Arbitrary, Debug)]
 enum Op {

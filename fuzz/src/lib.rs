@@ -14,6 +14,8 @@ use std::rc::Rc;
 use beam_body::fmi::{Interface, State, Status};
 use beam_body::fmi2::types::{FMI2_COSIMULATION, FMI2_MODEL_EXCHANGE};
 use beam_body::fmi2::{instantiate, Instance};
+use beam_body::fmi3;
+use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use beam_body::fmu::variables::{guid, BaseType, VARIABLES};
 
 /// The log records of one instance: (status, category, message).
@@ -40,6 +42,58 @@ pub fn instance_of(interface: Interface, logging_on: bool) -> (Instance, Records
     (inst, records)
 }
 
+/// An FMI 3.0 instance of `interface` with a recording logger; co-simulation's asks for
+/// intermediate update of `phi` (the harness plays the host's callback itself).
+pub fn instance3(interface: Interface) -> (Instance, Records) {
+    let records: Records = Rc::default();
+    let sink = records.clone();
+    let logger = Box::new(move |status: Status, category: &str, message: &str| {
+        sink.borrow_mut().push((status, category.to_string(), message.to_string()));
+    });
+    let phi = beam_body::fmu::variables::Var::Phi.vr();
+    let cs = (interface == Interface::CoSimulation).then(|| fmi3::CoSimulationArgs {
+        event_mode_used: false,
+        required: std::slice::from_ref(&phi),
+        intermediate_update: Some(Rc::new(|_| {})),
+    });
+    let inst = fmi3::instantiate("fuzz", interface, guid(), logger, false, cs)
+        .expect("a valid instantiation");
+    (inst, records)
+}
+
+/// A number, biased towards the values that matter at boundaries.
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum Num {
+    Zero,
+    One,
+    MinusOne,
+    Nan,
+    Inf,
+    NegInf,
+    Tiny,
+    Huge,
+    /// k/100: the ordinary range of the parameters and of communication steps.
+    Hundredths(i16),
+    Raw(f64),
+}
+
+impl Num {
+    pub fn value(self) -> f64 {
+        match self {
+            Num::Zero => 0.0,
+            Num::One => 1.0,
+            Num::MinusOne => -1.0,
+            Num::Nan => f64::NAN,
+            Num::Inf => f64::INFINITY,
+            Num::NegInf => f64::NEG_INFINITY,
+            Num::Tiny => 1e-300,
+            Num::Huge => 1e300,
+            Num::Hundredths(k) => f64::from(k) / 100.0,
+            Num::Raw(x) => x,
+        }
+    }
+}
+
 /// Checks the status of the call `function` made, against the records it logged (those
 /// after `before`).
 pub fn check_status(function: &str, status: Status, records: &Records, before: usize) {
@@ -62,6 +116,7 @@ fn readable(state: State) -> bool {
             | State::Error
             | State::EventMode
             | State::ContinuousTimeMode
+            | State::IntermediateUpdate
     )
 }
 
@@ -75,10 +130,11 @@ pub fn check_outputs(inst: &mut Instance, records: &Records) {
     let mut out = vec![0.0; vrs.len()];
     let before = records.borrow().len();
     let status = inst.get_real(&vrs, &mut out);
-    check_status("fmi2GetReal", status, records, before);
+    let name = if inst.api() == "fmi3" { "fmi3GetFloat64" } else { "fmi2GetReal" };
+    check_status(name, status, records, before);
     if status == Status::Ok {
         for (vr, x) in vrs.iter().zip(&out) {
-            assert!(x.is_finite(), "fmi2GetReal gave {x} for {}", VARIABLES[*vr as usize].name);
+            assert!(x.is_finite(), "{name} gave {x} for {}", VARIABLES[*vr as usize].name);
         }
     }
 }

@@ -14,6 +14,10 @@ pub const STATUS_PENDING: i32 = 1;
 pub const STATUS_LAST_SUCCESSFUL_TIME: i32 = 2;
 pub const STATUS_TERMINATED: i32 = 3;
 
+/// The most parts one step with intermediate update is cut into (FMI 3.0): the host's
+/// callback runs at most this many times a step.
+pub const MAX_PARTS: f64 = 10_000.0;
+
 impl<M: CoSimulation> Instance<M> {
     /// Whether `f`, a co-simulation function, may be called in the current state (`mask`)
     /// on this instance.
@@ -160,15 +164,22 @@ impl<M: CoSimulation> Instance<M> {
         self.edge(r)
     }
 
-    /// One part of a planned step towards `target`: the model's
-    /// [`intermediate_spacing`](CoSimulation::intermediate_spacing), or the rest of the step
-    /// when that is at most a quarter more. The status, and whether
-    /// `target` is reached.
-    pub fn step_part(&mut self, target: f64) -> (Status, bool) {
+    /// One part of a planned step of size `h` towards `target`: the model's
+    /// [`intermediate_spacing`](CoSimulation::intermediate_spacing) (at least `h` /
+    /// [`MAX_PARTS`], so that a step returns in bounded time), or the rest of the step when
+    /// that is at most a quarter more. The status, and whether `target` is reached.
+    pub fn step_part(&mut self, target: f64, h: f64) -> (Status, bool) {
         let f = self.func("DoStep");
         let from = self.core.time;
         let to = match self.core.model.intermediate_spacing() {
-            Some(dt) if dt > 0.0 && from + 1.25 * dt < target && from + dt > from => from + dt,
+            Some(dt) if dt > 0.0 => {
+                let dt = dt.max(h / MAX_PARTS);
+                if from + 1.25 * dt < target && from + dt > from {
+                    from + dt
+                } else {
+                    target
+                }
+            }
             _ => target,
         };
         let r = self.cs_allowed(f, mask::STEP_COMPLETE).and_then(|()| {

@@ -23,7 +23,9 @@ mod machine;
 pub mod model;
 mod snapshot;
 
-pub use cosim::{STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_PENDING, STATUS_TERMINATED};
+pub use cosim::{
+    MAX_PARTS, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_PENDING, STATUS_TERMINATED,
+};
 pub use description::{BaseType, VarInfo, LOG_CATEGORIES};
 pub use exchange::{EventInfo, StepEnd};
 pub use instance::{Func, Instance, IntermediateUpdate, Logger};

@@ -1077,7 +1077,7 @@ pub unsafe extern "C" fn fmi3DoStep(
     loop {
         let (mut reached, mut t) = (true, f64::NAN);
         let part = guard(instance, F, |inst| {
-            let (status, end) = inst.step_part(target);
+            let (status, end) = inst.step_part(target, h);
             (reached, t) = (end, inst.time());
             outs.write(inst);
             status

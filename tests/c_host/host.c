@@ -1,12 +1,14 @@
 /*
- * A minimal FMI 2.0 co-simulation host for the BeamBody FMU, used as a test fixture by
+ * A minimal FMI 2.0 and FMI 3.0 host for the BeamBody FMU, used as a test fixture by
  * tests/python/hosts/test_c_host.py (which compiles it with the system's cc and runs it natively and
  * under valgrind) and tests/python/hosts/test_c_host_platforms.py (which cross-compiles it for Windows
  * with mingw-w64 and for Linux aarch64, and runs it under wine and qemu-aarch64). It loads the
  * unzipped FMU's library for the platform it was compiled for (binaries/win64/BeamBody.dll,
  * binaries/aarch64-linux/BeamBody.so, binaries/darwin64/BeamBody.dylib, else
- * binaries/linux64/BeamBody.so) with dlopen/dlsym or LoadLibraryA/GetProcAddress, as a real host
- * would, and runs three checks:
+ * binaries/linux64/BeamBody.so; with --fmi3 FMI 3.0's folders: binaries/x86_64-windows/,
+ * binaries/aarch64-linux/, binaries/x86_64-darwin/ or binaries/aarch64-darwin/, else
+ * binaries/x86_64-linux/) with dlopen/dlsym or LoadLibraryA/GetProcAddress, as a real host
+ * would, and runs these checks:
  *
  *   1. scene:   the paper's scene (default parameters, phi_source = law, t = 0 .. 10.2 s,
  *               communication step 0.01 s, tolerance undefined = the FMU's default) recording
@@ -28,8 +30,34 @@
  *               state taken at t = 5.1 s, serialized and restored into a second instance, must
  *               continue bit for bit; calls out of Model Exchange's sequence are refused.
  *
- * usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] [--me-out TRAJ.csv] [--so LIB]
- *                     [--save-state S STATE.bin] [--resume STATE.bin]
+ * With --fmi3 the unzipped FMU is the FMI 3.0 archive (BeamBody-fmi3.fmu: its modelDescription
+ * gives the instantiationToken and the value references of <Float64>, <Enumeration>, ...
+ * variables), all 75 fmi3* functions must be exported (and the 44 fmi2* ones: the library has
+ * both), and checks 1-4 run through FMI 3.0: the same code, calling the FMI 3.0 functions through
+ * adapters with FMI 2.0's signatures (section "FMI 3.0 behind FMI 2.0's signatures"), which also
+ * check what FMI 3.0 returns in out-arguments: fmi3DoStep's (no event handling needed, no early
+ * return, not terminated, lastSuccessfulTime = tc + h exactly) and fmi3UpdateDiscreteStates's six.
+ * The experiment's set-up goes with fmi3EnterInitializationMode, enumerations are set with
+ * fmi3SetInt64, fmi2LastSuccessfulTime is the independent variable `time`, an fmi2Type that is
+ * neither interface becomes fmi3InstantiateScheduledExecution (which this FMU refuses). Then two
+ * checks of FMI 3.0 alone:
+ *   5. intermediate: phi_source = input, requiredIntermediateVariables = {phi}, intermediate_step
+ *               = 1 ms, communication step 8.5 ms over t = 0 .. 1.7 s: the FMU calls the host's
+ *               intermediate-update callback between the parts of each step (intermediate_step
+ *               while more than 1.25 of it remains, then the rest: 8 callbacks a step), where the
+ *               host sets phi to the paper's law at the time it is given, computed here with the
+ *               C library's sin. The count and the times of the callbacks must be the rule's
+ *               exactly, `time` must read the callback's time, and v1 must stay within 1e-4 m of
+ *               the law's run (phi_source = law, same steps; the FMU's sin is its own) and closer
+ *               to it than a run given phi at the communication points only.
+ *   6. misuse:  calls that must return fmi3Error without crashing: a NULL instance; an FMI 2.0
+ *               instance passed to fmi3DoStep and an FMI 3.0 one to fmi2DoStep (both still usable
+ *               after, and equal after a step); fmi3InstantiateScheduledExecution (NULL);
+ *               fmi3EnterConfigurationMode; fmi3UpdateDiscreteStates in co-simulation; fmi3DoStep
+ *               with a NULL out-argument. Each refusal logs exactly one error (none for NULL).
+ *
+ * usage: host UNZIPDIR [--fmi3] [--cycles N] [--threads K] [-o TRAJ.csv] [--me-out TRAJ.csv]
+ *                     [--so LIB] [--save-state S STATE.bin] [--resume STATE.bin]
  *                     [--no-dlclose | --reloads R]
  *        host UNZIPDIR --bench-dostep ROUNDS [--feed FEED] [--h H]
  * --so loads another build of the library (with the unzipped FMU's modelDescription.xml);
@@ -46,14 +74,15 @@
  * FMU-state cycle) and unloads it R more times.
  * --bench-dostep ROUNDS replaces the checks by the benchmark of fmi2DoStep (section 4, run by
  * `cargo xtask bench`); --feed FEED runs one way of sending phi only, --h H one communication step
- * only (for a profiler: `valgrind --tool=callgrind` counts its instructions).
+ * only (for a profiler: `valgrind --tool=callgrind` counts its instructions). FMI 2.0 only.
  * Exit code: 0 when every check passed, 1 on a failure (with a message on stderr), 2 on bad usage.
  *
  * What differs between POSIX and Windows (loading the library and its error text, threads and
  * their start gate, the monotonic clock) is in the platform shim below; the rest is plain C11.
- * The FMI 2.0 types are written here from the standard's headers (fmi2TypesPlatform.h,
- * fmi2FunctionTypes.h) so that the fixture needs nothing beyond the C library, the system's
- * thread and loader API (pthread and dlfcn, or kernel32) and libm.
+ * The FMI 2.0 and 3.0 types are written here from the standard's headers (fmi2TypesPlatform.h,
+ * fmi2FunctionTypes.h, fmi3PlatformTypes.h, fmi3FunctionTypes.h) so that the fixture needs
+ * nothing beyond the C library, the system's thread and loader API (pthread and dlfcn, or
+ * kernel32) and libm.
  */
 
 /* ----- platform shim ------------------------------------------------------------------------ */
@@ -79,6 +108,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -99,6 +129,21 @@
 #define LIB_DEFAULT "binaries/aarch64-linux/BeamBody.so"
 #else
 #define LIB_DEFAULT "binaries/linux64/BeamBody.so"
+#endif
+
+/* The same in an unzipped FMI 3.0 FMU (its platform tuples). */
+#if defined(_WIN64)
+#define LIB_DEFAULT3 "binaries/x86_64-windows/BeamBody.dll"
+#elif defined(_WIN32)
+#define LIB_DEFAULT3 "binaries/x86-windows/BeamBody.dll"
+#elif defined(__APPLE__) && defined(__aarch64__)
+#define LIB_DEFAULT3 "binaries/aarch64-darwin/BeamBody.dylib"
+#elif defined(__APPLE__)
+#define LIB_DEFAULT3 "binaries/x86_64-darwin/BeamBody.dylib"
+#elif defined(__linux__) && defined(__aarch64__)
+#define LIB_DEFAULT3 "binaries/aarch64-linux/BeamBody.so"
+#else
+#define LIB_DEFAULT3 "binaries/x86_64-linux/BeamBody.so"
 #endif
 
 /* printf-style checking of our own formatting functions: on mingw-w64 with its C99 stdio the
@@ -421,14 +466,178 @@ typedef struct {
     fmi2GetRealArrayTYPE *GetNominalsOfContinuousStates;
 } Api;
 
+/* ----- FMI 3.0 types ---------------------------------------------------------------------- */
+
+/* From fmi3PlatformTypes.h and fmi3FunctionTypes.h (FMI 3.0): the types, the callbacks, and
+ * the function types of the functions this host calls. */
+
+typedef void *fmi3Instance;
+typedef void *fmi3InstanceEnvironment;
+typedef void *fmi3FMUState;
+typedef uint32_t fmi3ValueReference;
+typedef double fmi3Float64;
+typedef int32_t fmi3Int32;
+typedef int64_t fmi3Int64;
+typedef bool fmi3Boolean;
+typedef char fmi3Char;
+typedef const fmi3Char *fmi3String;
+typedef uint8_t fmi3Byte;
+
+#define fmi3True true
+#define fmi3False false
+
+typedef enum { fmi3OK, fmi3Warning, fmi3Discard, fmi3Error, fmi3Fatal } fmi3Status;
+
+/* The message as it is: not a format, no variadic arguments, no instance name. */
+typedef void (*fmi3LogMessageCallback)(fmi3InstanceEnvironment, fmi3Status, fmi3String category,
+                                       fmi3String message);
+typedef void (*fmi3ClockUpdateCallback)(fmi3InstanceEnvironment);
+typedef void (*fmi3IntermediateUpdateCallback)(
+    fmi3InstanceEnvironment, fmi3Float64 intermediateUpdateTime,
+    fmi3Boolean intermediateVariableSetRequested, fmi3Boolean intermediateVariableGetAllowed,
+    fmi3Boolean intermediateStepFinished, fmi3Boolean canReturnEarly,
+    fmi3Boolean *earlyReturnRequested, fmi3Float64 *earlyReturnTime);
+typedef void (*fmi3LockPreemptionCallback)(void);
+typedef void (*fmi3UnlockPreemptionCallback)(void);
+
+typedef const char *fmi3GetVersionTYPE(void);
+typedef fmi3Status fmi3SetDebugLoggingTYPE(fmi3Instance, fmi3Boolean, size_t, const fmi3String[]);
+typedef fmi3Instance fmi3InstantiateModelExchangeTYPE(fmi3String instanceName,
+                                                      fmi3String instantiationToken,
+                                                      fmi3String resourcePath, fmi3Boolean visible,
+                                                      fmi3Boolean loggingOn,
+                                                      fmi3InstanceEnvironment,
+                                                      fmi3LogMessageCallback);
+typedef fmi3Instance fmi3InstantiateCoSimulationTYPE(
+    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
+    fmi3Boolean visible, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
+    fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
+    size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment, fmi3LogMessageCallback,
+    fmi3IntermediateUpdateCallback);
+typedef fmi3Instance fmi3InstantiateScheduledExecutionTYPE(
+    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
+    fmi3Boolean visible, fmi3Boolean loggingOn, fmi3InstanceEnvironment, fmi3LogMessageCallback,
+    fmi3ClockUpdateCallback, fmi3LockPreemptionCallback, fmi3UnlockPreemptionCallback);
+typedef void fmi3FreeInstanceTYPE(fmi3Instance);
+typedef fmi3Status fmi3EnterInitializationModeTYPE(fmi3Instance, fmi3Boolean toleranceDefined,
+                                                   fmi3Float64 tolerance, fmi3Float64 startTime,
+                                                   fmi3Boolean stopTimeDefined,
+                                                   fmi3Float64 stopTime);
+/* ExitInitializationMode, EnterEventMode, Terminate, Reset, EnterConfigurationMode,
+ * EnterContinuousTimeMode: the header declares each with this shape. */
+typedef fmi3Status fmi3InstanceFunctionTYPE(fmi3Instance);
+typedef fmi3Status fmi3GetFloat64TYPE(fmi3Instance, const fmi3ValueReference[], size_t,
+                                      fmi3Float64[], size_t nValues);
+typedef fmi3Status fmi3SetFloat64TYPE(fmi3Instance, const fmi3ValueReference[], size_t,
+                                      const fmi3Float64[], size_t nValues);
+typedef fmi3Status fmi3SetInt64TYPE(fmi3Instance, const fmi3ValueReference[], size_t,
+                                    const fmi3Int64[], size_t nValues);
+typedef fmi3Status fmi3GetFMUStateTYPE(fmi3Instance, fmi3FMUState *);
+typedef fmi3Status fmi3SetFMUStateTYPE(fmi3Instance, fmi3FMUState);
+typedef fmi3Status fmi3FreeFMUStateTYPE(fmi3Instance, fmi3FMUState *);
+typedef fmi3Status fmi3SerializedFMUStateSizeTYPE(fmi3Instance, fmi3FMUState, size_t *);
+typedef fmi3Status fmi3SerializeFMUStateTYPE(fmi3Instance, fmi3FMUState, fmi3Byte[], size_t);
+typedef fmi3Status fmi3DeserializeFMUStateTYPE(fmi3Instance, const fmi3Byte[], size_t,
+                                               fmi3FMUState *);
+typedef fmi3Status fmi3UpdateDiscreteStatesTYPE(fmi3Instance,
+                                                fmi3Boolean *discreteStatesNeedUpdate,
+                                                fmi3Boolean *terminateSimulation,
+                                                fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                                fmi3Boolean *valuesOfContinuousStatesChanged,
+                                                fmi3Boolean *nextEventTimeDefined,
+                                                fmi3Float64 *nextEventTime);
+typedef fmi3Status fmi3CompletedIntegratorStepTYPE(fmi3Instance,
+                                                   fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                                   fmi3Boolean *enterEventMode,
+                                                   fmi3Boolean *terminateSimulation);
+typedef fmi3Status fmi3SetTimeTYPE(fmi3Instance, fmi3Float64);
+typedef fmi3Status fmi3SetContinuousStatesTYPE(fmi3Instance, const fmi3Float64[], size_t);
+/* GetContinuousStateDerivatives, GetEventIndicators, GetContinuousStates,
+ * GetNominalsOfContinuousStates */
+typedef fmi3Status fmi3GetFloat64ArrayTYPE(fmi3Instance, fmi3Float64[], size_t);
+typedef fmi3Status fmi3GetNumberOfTYPE(fmi3Instance, size_t *); /* states, event indicators */
+typedef fmi3Status fmi3DoStepTYPE(fmi3Instance, fmi3Float64 currentCommunicationPoint,
+                                  fmi3Float64 communicationStepSize,
+                                  fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                  fmi3Boolean *eventHandlingNeeded,
+                                  fmi3Boolean *terminateSimulation, fmi3Boolean *earlyReturn,
+                                  fmi3Float64 *lastSuccessfulTime);
+
+/* The 75 functions of fmi3Functions.h: common, Model Exchange, co-simulation, scheduled
+ * execution. An FMU exports all of them whatever it provides. */
+static const char *const ALL_EXPORTS3[] = {
+    "fmi3GetVersion", "fmi3SetDebugLogging", "fmi3InstantiateModelExchange",
+    "fmi3InstantiateCoSimulation", "fmi3InstantiateScheduledExecution", "fmi3FreeInstance",
+    "fmi3EnterInitializationMode", "fmi3ExitInitializationMode", "fmi3EnterEventMode",
+    "fmi3Terminate", "fmi3Reset", "fmi3GetFloat32", "fmi3GetFloat64", "fmi3GetInt8",
+    "fmi3GetUInt8", "fmi3GetInt16", "fmi3GetUInt16", "fmi3GetInt32", "fmi3GetUInt32",
+    "fmi3GetInt64", "fmi3GetUInt64", "fmi3GetBoolean", "fmi3GetString", "fmi3GetBinary",
+    "fmi3GetClock", "fmi3SetFloat32", "fmi3SetFloat64", "fmi3SetInt8", "fmi3SetUInt8",
+    "fmi3SetInt16", "fmi3SetUInt16", "fmi3SetInt32", "fmi3SetUInt32", "fmi3SetInt64",
+    "fmi3SetUInt64", "fmi3SetBoolean", "fmi3SetString", "fmi3SetBinary", "fmi3SetClock",
+    "fmi3GetNumberOfVariableDependencies", "fmi3GetVariableDependencies", "fmi3GetFMUState",
+    "fmi3SetFMUState", "fmi3FreeFMUState", "fmi3SerializedFMUStateSize",
+    "fmi3SerializeFMUState", "fmi3DeserializeFMUState", "fmi3GetDirectionalDerivative",
+    "fmi3GetAdjointDerivative", "fmi3EnterConfigurationMode", "fmi3ExitConfigurationMode",
+    "fmi3GetIntervalDecimal", "fmi3GetIntervalFraction", "fmi3GetShiftDecimal",
+    "fmi3GetShiftFraction", "fmi3SetIntervalDecimal", "fmi3SetIntervalFraction",
+    "fmi3SetShiftDecimal", "fmi3SetShiftFraction", "fmi3EvaluateDiscreteStates",
+    "fmi3UpdateDiscreteStates", "fmi3EnterContinuousTimeMode", "fmi3CompletedIntegratorStep",
+    "fmi3SetTime", "fmi3SetContinuousStates", "fmi3GetContinuousStateDerivatives",
+    "fmi3GetEventIndicators", "fmi3GetContinuousStates", "fmi3GetNominalsOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators", "fmi3GetNumberOfContinuousStates", "fmi3EnterStepMode",
+    "fmi3GetOutputDerivatives", "fmi3DoStep", "fmi3ActivateModelPartition",
+};
+#define N_EXPORTS3 (sizeof ALL_EXPORTS3 / sizeof ALL_EXPORTS3[0])
+
+/* The FMI 3.0 functions this host calls. */
+typedef struct {
+    fmi3GetVersionTYPE *GetVersion;
+    fmi3SetDebugLoggingTYPE *SetDebugLogging;
+    fmi3InstantiateModelExchangeTYPE *InstantiateModelExchange;
+    fmi3InstantiateCoSimulationTYPE *InstantiateCoSimulation;
+    fmi3InstantiateScheduledExecutionTYPE *InstantiateScheduledExecution;
+    fmi3FreeInstanceTYPE *FreeInstance;
+    fmi3EnterInitializationModeTYPE *EnterInitializationMode;
+    fmi3InstanceFunctionTYPE *ExitInitializationMode;
+    fmi3InstanceFunctionTYPE *EnterEventMode;
+    fmi3InstanceFunctionTYPE *Terminate;
+    fmi3InstanceFunctionTYPE *Reset;
+    fmi3InstanceFunctionTYPE *EnterConfigurationMode;
+    fmi3GetFloat64TYPE *GetFloat64;
+    fmi3SetFloat64TYPE *SetFloat64;
+    fmi3SetInt64TYPE *SetInt64;
+    fmi3GetFMUStateTYPE *GetFMUState;
+    fmi3SetFMUStateTYPE *SetFMUState;
+    fmi3FreeFMUStateTYPE *FreeFMUState;
+    fmi3SerializedFMUStateSizeTYPE *SerializedFMUStateSize;
+    fmi3SerializeFMUStateTYPE *SerializeFMUState;
+    fmi3DeserializeFMUStateTYPE *DeserializeFMUState;
+    fmi3UpdateDiscreteStatesTYPE *UpdateDiscreteStates;
+    fmi3InstanceFunctionTYPE *EnterContinuousTimeMode;
+    fmi3CompletedIntegratorStepTYPE *CompletedIntegratorStep;
+    fmi3SetTimeTYPE *SetTime;
+    fmi3SetContinuousStatesTYPE *SetContinuousStates;
+    fmi3GetFloat64ArrayTYPE *GetContinuousStateDerivatives;
+    fmi3GetFloat64ArrayTYPE *GetEventIndicators;
+    fmi3GetFloat64ArrayTYPE *GetContinuousStates;
+    fmi3GetFloat64ArrayTYPE *GetNominalsOfContinuousStates;
+    fmi3GetNumberOfTYPE *GetNumberOfContinuousStates;
+    fmi3GetNumberOfTYPE *GetNumberOfEventIndicators;
+    fmi3DoStepTYPE *DoStep;
+} Api3;
+
 /* ----- the model's interface, read from modelDescription.xml ------------------------------- */
 
 typedef struct {
-    char guid[128];
+    int fmi3;       /* read from an FMI 3.0 modelDescription */
+    char guid[128]; /* FMI 3.0: the instantiationToken */
     fmi2ValueReference ei, phi_end, phi_source, v1, theta1, u2;
     fmi2ValueReference phi, fixed_step, phi_interpolation; /* for --bench-dostep */
+    fmi2ValueReference time, intermediate_step;            /* FMI 3.0 only */
 } Model;
 
+#define PHI_SOURCE_INPUT 1
 #define PHI_SOURCE_LAW 2 /* enumeration PhiSource: 1 = input (the start value), 2 = law */
 
 /* The paper's scene: communication points k*H for k = 0..N_STEPS (k*H, not a running sum, as
@@ -455,18 +664,28 @@ static int fail(Err *e, const char *fmt, ...) {
     return -1;
 }
 
+/* The FMI version the checks run through (--fmi3: 3), for the names of statuses. */
+static int g_fmi = 2;
+
+/* Not a status of the FMU: an adapter of FMI 3.0 (see "FMI 3.0 behind FMI 2.0's signatures")
+ * found a wrong out-argument in a call that returned fmi3OK; its message is the instance's last. */
+#define HOST_CHECK_FAILED 7
+
 static const char *status_name(int s) {
-    static const char *const names[] = {"fmi2OK",    "fmi2Warning", "fmi2Discard",
-                                        "fmi2Error", "fmi2Fatal",   "fmi2Pending"};
-    return s >= 0 && s <= 5 ? names[s] : "(not an fmi2Status)";
+    static const char *const names[2][6] = {
+        {"fmi2OK", "fmi2Warning", "fmi2Discard", "fmi2Error", "fmi2Fatal", "fmi2Pending"},
+        {"fmi3OK", "fmi3Warning", "fmi3Discard", "fmi3Error", "fmi3Fatal", "(not an fmi3Status)"}};
+    if (s == HOST_CHECK_FAILED) return "fmi3OK with an out-argument the host refuses";
+    return s >= 0 && s <= 5 ? names[g_fmi == 3][s] : "(not a status)";
 }
 
-/* Calls `call`, which must return fmi2OK; otherwise records the call's text, line, status and
- * the instance's last log message, and jumps to the function's `out` label. Expects `who` (a
- * name for the message), `lc` (the instance's LogCtx) and `err` in scope. */
+/* Calls `call`, which must return fmi2OK (fmi3OK); otherwise records the call's text, line,
+ * status and the instance's last log message, and jumps to the function's `out` label. Expects
+ * `who` (a name for the message), `lc` (the instance's LogCtx) and `err` in scope. The status is
+ * taken as an int: fmi2Status and fmi3Status are different enums with the same values. */
 #define OK(call)                                                                               \
     do {                                                                                       \
-        fmi2Status got_ = (call);                                                              \
+        int got_ = (int)(call);                                                                \
         if (got_ != fmi2OK) {                                                                  \
             fail(err, "%s: line %d: %s returned %s (last message: `%s`)", who, __LINE__, #call, \
                  status_name(got_), lc->last);                                                 \
@@ -474,18 +693,19 @@ static const char *status_name(int s) {
         }                                                                                      \
     } while (0)
 
-/* A call out of sequence or with a bad argument: it must return fmi2Error and log exactly one
- * error (which the logger then does not count as unexpected). */
+/* A call out of sequence or with a bad argument: it must return fmi2Error (fmi3Error) and log
+ * exactly one error (which the logger then does not count as unexpected). */
 #define REFUSED(call)                                                                          \
     do {                                                                                       \
         long before_ = lc->count[fmi2Error];                                                   \
         lc->expect_errors = 1;                                                                 \
-        fmi2Status got_ = (call);                                                              \
+        int got_ = (int)(call);                                                                \
         lc->expect_errors = 0;                                                                 \
         if (got_ != fmi2Error || lc->count[fmi2Error] != before_ + 1) {                        \
             fail(err, "%s: line %d: %s returned %s with %ld error messages, expected "         \
-                      "fmi2Error and one message",                                             \
-                 who, __LINE__, #call, status_name(got_), lc->count[fmi2Error] - before_);     \
+                      "%s and one message",                                                    \
+                 who, __LINE__, #call, status_name(got_), lc->count[fmi2Error] - before_,      \
+                 status_name(fmi2Error));                                                      \
             goto out;                                                                          \
         }                                                                                      \
     } while (0)
@@ -513,14 +733,10 @@ static atomic_long g_messages = 0;
 static const char *const CATEGORIES[] = {"logStatusWarning", "logStatusDiscard", "logStatusError",
                                          "logStatusFatal",   "logCalls",         "logAll"};
 
-static void logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2Status status,
-                   fmi2String category, fmi2String message, ...) {
-    char text[1024];
-    va_list ap;
-    va_start(ap, message);
-    /* printf-like, as the standard requires: the FMU passes "%s" and the text. */
-    vsnprintf(text, sizeof text, message ? message : "(null format)", ap);
-    va_end(ap);
+/* What both loggers do with a message (`instanceName`: NULL from FMI 3.0, whose callback has
+ * none; `status` the same number in fmi2Status and fmi3Status). */
+static void log_message(void *env, int fmi3, fmi2String instanceName, int status,
+                        fmi2String category, const char *text) {
     atomic_fetch_add(&g_messages, 1);
 
     LogCtx *ctx = env;
@@ -532,13 +748,13 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2St
     int known = 0;
     for (size_t k = 0; category && k < sizeof CATEGORIES / sizeof CATEGORIES[0]; k++)
         known |= strcmp(category, CATEGORIES[k]) == 0;
-    if (!instanceName || strcmp(instanceName, ctx->name) != 0 || !known) {
+    if ((!fmi3 && (!instanceName || strcmp(instanceName, ctx->name) != 0)) || !known) {
         atomic_fetch_add(&g_bad_log, 1);
         fprintf(stderr, "logger: [%s] instanceName `%s` (expected `%s`), category `%s`: %s\n",
                 status_name(status), instanceName ? instanceName : "(null)", ctx->name,
                 category ? category : "(null)", text);
     }
-    if ((int)status >= 0 && (int)status <= 5) ctx->count[status]++;
+    if (status >= 0 && status <= 5) ctx->count[status]++;
     size_t len = strnlen(text, sizeof ctx->last - 1); /* truncation is fine for a reminder */
     memcpy(ctx->last, text, len);
     ctx->last[len] = '\0';
@@ -550,6 +766,23 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2St
         fprintf(stderr, "logger: (expected) %s from `%s`: %s\n", status_name(status), ctx->name,
                 text);
     }
+}
+
+static void logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2Status status,
+                   fmi2String category, fmi2String message, ...) {
+    char text[1024];
+    va_list ap;
+    va_start(ap, message);
+    /* printf-like, as the standard requires: the FMU passes "%s" and the text. */
+    vsnprintf(text, sizeof text, message ? message : "(null format)", ap);
+    va_end(ap);
+    log_message(env, 0, instanceName, (int)status, category, text);
+}
+
+/* FMI 3.0's logMessage: the message is the text itself (a '%' in it is just a character). */
+static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
+                    fmi3String message) {
+    log_message(env, 1, NULL, (int)status, category, message ? message : "(null message)");
 }
 
 static void ctx_init(LogCtx *ctx, const char *name) {
@@ -587,36 +820,56 @@ static char *read_file(const char *path, size_t *size) {
     return buf;
 }
 
-/* The value reference of the ScalarVariable called `name` (xtask writes `name` then
- * `valueReference`, in that order, on one line). */
-static int find_vr(const char *xml, const char *name, fmi2ValueReference *vr, Err *err) {
+/* The value reference of the variable called `name` (xtask writes `name` then
+ * `valueReference`, in that order, on one line): a ScalarVariable in FMI 2.0, in FMI 3.0 an
+ * element named by its type, `type` (Float64, Enumeration, ...). */
+static int find_vr(const char *xml, const Model *m, const char *type, const char *name,
+                   fmi2ValueReference *vr, Err *err) {
     char key[96];
-    snprintf(key, sizeof key, "<ScalarVariable name=\"%s\" valueReference=\"", name);
+    const char *element = m->fmi3 ? type : "ScalarVariable";
+    snprintf(key, sizeof key, "<%s name=\"%s\" valueReference=\"", element, name);
     const char *p = strstr(xml, key);
-    if (!p) return fail(err, "modelDescription.xml: no ScalarVariable named `%s`", name);
+    if (!p) return fail(err, "modelDescription.xml: no %s named `%s`", element, name);
     *vr = (fmi2ValueReference)strtoul(p + strlen(key), NULL, 10);
     return 0;
 }
 
-static int read_model(const char *unzipdir, Model *m, Err *err) {
+/* The modelDescription.xml of an FMI 2.0 FMU, or with `fmi3` of an FMI 3.0 one. */
+static int read_model(const char *unzipdir, int fmi3, Model *m, Err *err) {
     char path[4096];
     snprintf(path, sizeof path, "%s/modelDescription.xml", unzipdir);
     char *xml = read_file(path, NULL);
     if (!xml) return fail(err, "cannot read %s", path);
     int rc = -1;
-    const char *g = strstr(xml, " guid=\"");
-    const char *end = g ? strchr(g + 7, '"') : NULL;
-    if (!g || !end || (size_t)(end - g - 7) >= sizeof m->guid) {
-        fail(err, "%s: no guid attribute", path);
+    m->fmi3 = fmi3;
+    const char *version = fmi3 ? "fmiVersion=\"3.0\"" : "fmiVersion=\"2.0\"";
+    if (!strstr(xml, version)) {
+        fail(err, "%s: not an FMI %s model description (no %s)", path, fmi3 ? "3.0" : "2.0",
+             version);
         goto out;
     }
-    memcpy(m->guid, g + 7, (size_t)(end - g - 7));
-    m->guid[end - g - 7] = '\0';
-    if (find_vr(xml, "EI", &m->ei, err) || find_vr(xml, "phi_end", &m->phi_end, err) ||
-        find_vr(xml, "phi_source", &m->phi_source, err) || find_vr(xml, "v1", &m->v1, err) ||
-        find_vr(xml, "theta1", &m->theta1, err) || find_vr(xml, "u2", &m->u2, err) ||
-        find_vr(xml, "phi", &m->phi, err) || find_vr(xml, "fixed_step", &m->fixed_step, err) ||
-        find_vr(xml, "phi_interpolation", &m->phi_interpolation, err))
+    const char *attr = fmi3 ? " instantiationToken=\"" : " guid=\"";
+    const char *g = strstr(xml, attr);
+    if (g) g += strlen(attr);
+    const char *end = g ? strchr(g, '"') : NULL;
+    if (!g || !end || (size_t)(end - g) >= sizeof m->guid) {
+        fail(err, "%s: no%s attribute", path, attr);
+        goto out;
+    }
+    memcpy(m->guid, g, (size_t)(end - g));
+    m->guid[end - g] = '\0';
+    if (find_vr(xml, m, "Float64", "EI", &m->ei, err) ||
+        find_vr(xml, m, "Float64", "phi_end", &m->phi_end, err) ||
+        find_vr(xml, m, "Enumeration", "phi_source", &m->phi_source, err) ||
+        find_vr(xml, m, "Float64", "v1", &m->v1, err) ||
+        find_vr(xml, m, "Float64", "theta1", &m->theta1, err) ||
+        find_vr(xml, m, "Float64", "u2", &m->u2, err) ||
+        find_vr(xml, m, "Float64", "phi", &m->phi, err) ||
+        find_vr(xml, m, "Float64", "fixed_step", &m->fixed_step, err) ||
+        find_vr(xml, m, "Enumeration", "phi_interpolation", &m->phi_interpolation, err))
+        goto out;
+    if (fmi3 && (find_vr(xml, m, "Float64", "time", &m->time, err) ||
+                 find_vr(xml, m, "Float64", "intermediate_step", &m->intermediate_step, err)))
         goto out;
     rc = 0;
 out:
@@ -672,11 +925,312 @@ static int load_api(Lib lib, Api *api, Err *err) {
     return 0;
 }
 
+static int load_api3(Lib lib, Api3 *api, Err *err) {
+    for (size_t k = 0; k < N_EXPORTS3; k++)
+        if (!lib_sym(lib, ALL_EXPORTS3[k]))
+            return fail(err, "the library does not export %s (%s)", ALL_EXPORTS3[k], lib_error());
+#define SYM(field) api->field = (__typeof__(api->field))lib_sym(lib, "fmi3" #field)
+    SYM(GetVersion);
+    SYM(SetDebugLogging);
+    SYM(InstantiateModelExchange);
+    SYM(InstantiateCoSimulation);
+    SYM(InstantiateScheduledExecution);
+    SYM(FreeInstance);
+    SYM(EnterInitializationMode);
+    SYM(ExitInitializationMode);
+    SYM(EnterEventMode);
+    SYM(Terminate);
+    SYM(Reset);
+    SYM(EnterConfigurationMode);
+    SYM(GetFloat64);
+    SYM(SetFloat64);
+    SYM(SetInt64);
+    SYM(GetFMUState);
+    SYM(SetFMUState);
+    SYM(FreeFMUState);
+    SYM(SerializedFMUStateSize);
+    SYM(SerializeFMUState);
+    SYM(DeserializeFMUState);
+    SYM(UpdateDiscreteStates);
+    SYM(EnterContinuousTimeMode);
+    SYM(CompletedIntegratorStep);
+    SYM(SetTime);
+    SYM(SetContinuousStates);
+    SYM(GetContinuousStateDerivatives);
+    SYM(GetEventIndicators);
+    SYM(GetContinuousStates);
+    SYM(GetNominalsOfContinuousStates);
+    SYM(GetNumberOfContinuousStates);
+    SYM(GetNumberOfEventIndicators);
+    SYM(DoStep);
+#undef SYM
+    if (strcmp(api->GetVersion(), "3.0") != 0)
+        return fail(err, "fmi3GetVersion() = `%s`, expected `3.0`", api->GetVersion());
+    return 0;
+}
+
+/* ----- FMI 3.0 behind FMI 2.0's signatures ------------------------------------------------ */
+
+/* Checks 1-4 call the FMI 2.0 functions of an Api. With --fmi3 they get an Api of the adapters
+ * below instead, each an FMI 2.0 function made of FMI 3.0 calls, so that the same code runs the
+ * same scenes through FMI 3.0. The component they hand around is then an Inst3: the FMI 3.0
+ * instance, and what FMI 2.0 gives in a call that FMI 3.0 gives in another. What FMI 3.0 returns
+ * in out-arguments and FMI 2.0 does not is checked here; a wrong one turns fmi3OK into
+ * HOST_CHECK_FAILED, with the reason as the instance's last message. */
+
+typedef struct {
+    fmi3Instance inst;
+    LogCtx *ctx; /* the instance environment */
+    /* fmi2SetupExperiment's arguments, for fmi3EnterInitializationMode */
+    bool tolerance_defined, stop_time_defined;
+    double tolerance, start_time, stop_time;
+} Inst3;
+
+/* The FMI 3.0 functions the adapters call, and the value reference of `time`. */
+static struct {
+    Api3 f;
+    fmi3ValueReference time;
+} g3;
+
+#define INST3(c) (((Inst3 *)(c))->inst)
+
+static fmi2Status refuse_out(Inst3 *w, const char *fmt, ...) PRINTF_LIKE(2, 3);
+static fmi2Status refuse_out(Inst3 *w, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(w->ctx->last, sizeof w->ctx->last, fmt, ap);
+    va_end(ap);
+    return (fmi2Status)HOST_CHECK_FAILED;
+}
+
+/* fmi2Instantiate: co-simulation without event mode, early return or intermediate variables;
+ * Model Exchange; a type that is neither, FMI 3.0's third interface, which this FMU does not
+ * provide (it must return NULL and log one error, as fmi2Instantiate does for such a type). */
+static fmi2Component a3_instantiate(fmi2String name, fmi2Type type, fmi2String token,
+                                    fmi2String resources, const fmi2CallbackFunctions *cb,
+                                    fmi2Boolean visible, fmi2Boolean logging_on) {
+    Inst3 *w = calloc(1, sizeof *w);
+    if (!w) return NULL;
+    void *env = cb->componentEnvironment;
+    w->ctx = env;
+    bool vis = visible != fmi2False, on = logging_on != fmi2False;
+    if (type == fmi2CoSimulation)
+        w->inst = g3.f.InstantiateCoSimulation(name, token, resources, vis, on, fmi3False,
+                                               fmi3False, NULL, 0, env, logger3, NULL);
+    else if (type == fmi2ModelExchange)
+        w->inst = g3.f.InstantiateModelExchange(name, token, resources, vis, on, env, logger3);
+    else
+        w->inst = g3.f.InstantiateScheduledExecution(name, token, resources, vis, on, env, logger3,
+                                                     NULL, NULL, NULL);
+    if (!w->inst) {
+        free(w);
+        return NULL;
+    }
+    return w;
+}
+
+static void a3_free_instance(fmi2Component c) {
+    if (!c) return;
+    g3.f.FreeInstance(INST3(c));
+    free(c);
+}
+
+static fmi2Status a3_set_debug_logging(fmi2Component c, fmi2Boolean on, size_t n,
+                                       const fmi2String categories[]) {
+    return (fmi2Status)g3.f.SetDebugLogging(INST3(c), on != fmi2False, n, categories);
+}
+
+/* FMI 3.0 takes the experiment's set-up with fmi3EnterInitializationMode: kept until then. */
+static fmi2Status a3_setup_experiment(fmi2Component c, fmi2Boolean tolerance_defined,
+                                      fmi2Real tolerance, fmi2Real start, fmi2Boolean stop_defined,
+                                      fmi2Real stop) {
+    Inst3 *w = c;
+    w->tolerance_defined = tolerance_defined != fmi2False;
+    w->tolerance = tolerance;
+    w->start_time = start;
+    w->stop_time_defined = stop_defined != fmi2False;
+    w->stop_time = stop;
+    return fmi2OK;
+}
+
+static fmi2Status a3_enter_initialization_mode(fmi2Component c) {
+    Inst3 *w = c;
+    return (fmi2Status)g3.f.EnterInitializationMode(w->inst, w->tolerance_defined, w->tolerance,
+                                                    w->start_time, w->stop_time_defined,
+                                                    w->stop_time);
+}
+
+#define A3_INSTANCE_FUNCTION(name, fn)                                                          \
+    static fmi2Status name(fmi2Component c) { return (fmi2Status)g3.f.fn(INST3(c)); }
+A3_INSTANCE_FUNCTION(a3_exit_initialization_mode, ExitInitializationMode)
+A3_INSTANCE_FUNCTION(a3_terminate, Terminate)
+A3_INSTANCE_FUNCTION(a3_reset, Reset)
+A3_INSTANCE_FUNCTION(a3_enter_event_mode, EnterEventMode)
+A3_INSTANCE_FUNCTION(a3_enter_continuous_time_mode, EnterContinuousTimeMode)
+
+static fmi2Status a3_get_real(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                              fmi2Real value[]) {
+    return (fmi2Status)g3.f.GetFloat64(INST3(c), vr, n, value, n);
+}
+
+static fmi2Status a3_set_real(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                              const fmi2Real value[]) {
+    return (fmi2Status)g3.f.SetFloat64(INST3(c), vr, n, value, n);
+}
+
+/* The checks set enumerations only through fmi2SetInteger: FMI 3.0's are Int64. */
+static fmi2Status a3_set_integer(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                                 const fmi2Integer value[]) {
+    fmi3Int64 wide[8];
+    if (n > sizeof wide / sizeof wide[0])
+        return refuse_out(c, "fmi2SetInteger adapter: %zu values, at most 8", n);
+    for (size_t k = 0; k < n; k++) wide[k] = value[k];
+    return (fmi2Status)g3.f.SetInt64(INST3(c), vr, n, wide, n);
+}
+
+static fmi2Status a3_get_fmu_state(fmi2Component c, fmi2FMUstate *s) {
+    return (fmi2Status)g3.f.GetFMUState(INST3(c), s);
+}
+static fmi2Status a3_set_fmu_state(fmi2Component c, fmi2FMUstate s) {
+    return (fmi2Status)g3.f.SetFMUState(INST3(c), s);
+}
+static fmi2Status a3_free_fmu_state(fmi2Component c, fmi2FMUstate *s) {
+    return (fmi2Status)g3.f.FreeFMUState(INST3(c), s);
+}
+static fmi2Status a3_serialized_fmu_state_size(fmi2Component c, fmi2FMUstate s, size_t *size) {
+    return (fmi2Status)g3.f.SerializedFMUStateSize(INST3(c), s, size);
+}
+static fmi2Status a3_serialize_fmu_state(fmi2Component c, fmi2FMUstate s, fmi2Byte bytes[],
+                                         size_t size) {
+    return (fmi2Status)g3.f.SerializeFMUState(INST3(c), s, (fmi3Byte *)bytes, size);
+}
+static fmi2Status a3_deserialize_fmu_state(fmi2Component c, const fmi2Byte bytes[], size_t size,
+                                           fmi2FMUstate *s) {
+    return (fmi2Status)g3.f.DeserializeFMUState(INST3(c), (const fmi3Byte *)bytes, size, s);
+}
+
+/* fmi3DoStep, its out-arguments checked when it returns fmi3OK (each set to the wrong value
+ * before the call, so that one left unwritten shows). */
+static fmi2Status a3_do_step(fmi2Component c, fmi2Real tc, fmi2Real h, fmi2Boolean no_prior) {
+    Inst3 *w = c;
+    bool event = true, terminate = true, early = true;
+    double last = NAN;
+    fmi3Status s = g3.f.DoStep(w->inst, tc, h, no_prior != fmi2False, &event, &terminate, &early,
+                               &last);
+    if (s == fmi3OK && (event || terminate || early || !(last == tc + h)))
+        return refuse_out(w, "fmi3DoStep(tc = %.17g, h = %.17g): eventHandlingNeeded = %d, "
+                             "terminateSimulation = %d, earlyReturn = %d, lastSuccessfulTime = "
+                             "%.17g; expected false, false, false, tc + h = %.17g",
+                          tc, h, event, terminate, early, last, tc + h);
+    return (fmi2Status)s;
+}
+
+/* fmi2LastSuccessfulTime: FMI 3.0's fmi3DoStep returns it; at any other time (after a state
+ * is restored) it is the independent variable `time`. */
+static fmi2Status a3_get_real_status(fmi2Component c, const fmi2StatusKind kind, fmi2Real *value) {
+    if (kind != fmi2LastSuccessfulTime)
+        return refuse_out(c, "fmi2GetRealStatus adapter: kind %d is not fmi2LastSuccessfulTime",
+                          (int)kind);
+    return (fmi2Status)g3.f.GetFloat64(INST3(c), &g3.time, 1, value, 1);
+}
+
+/* fmi3UpdateDiscreteStates's six out-arguments into fmi2EventInfo. This model's only event is
+ * the law's end, a time event: it changes neither the states' values nor their nominals. */
+static fmi2Status a3_new_discrete_states(fmi2Component c, fmi2EventInfo *info) {
+    bool need = true, terminate = true, nominals = true, values = true, defined = true;
+    double next = NAN;
+    fmi3Status s = g3.f.UpdateDiscreteStates(INST3(c), &need, &terminate, &nominals, &values,
+                                             &defined, &next);
+    *info = (fmi2EventInfo){need, terminate, nominals, values, defined, next};
+    if (s == fmi3OK && (nominals || values || (defined && !isfinite(next))))
+        return refuse_out(c, "fmi3UpdateDiscreteStates: nominalsOfContinuousStatesChanged = %d, "
+                             "valuesOfContinuousStatesChanged = %d, nextEventTimeDefined = %d, "
+                             "nextEventTime = %g",
+                          nominals, values, defined, next);
+    return (fmi2Status)s;
+}
+
+static fmi2Status a3_completed_integrator_step(fmi2Component c, fmi2Boolean no_prior,
+                                               fmi2Boolean *enter, fmi2Boolean *terminate) {
+    bool e = true, t = true;
+    fmi3Status s = g3.f.CompletedIntegratorStep(INST3(c), no_prior != fmi2False, &e, &t);
+    *enter = e, *terminate = t;
+    return (fmi2Status)s;
+}
+
+static fmi2Status a3_set_time(fmi2Component c, fmi2Real t) {
+    return (fmi2Status)g3.f.SetTime(INST3(c), t);
+}
+static fmi2Status a3_set_continuous_states(fmi2Component c, const fmi2Real x[], size_t n) {
+    return (fmi2Status)g3.f.SetContinuousStates(INST3(c), x, n);
+}
+
+#define A3_ARRAY_FUNCTION(name, fn)                                                             \
+    static fmi2Status name(fmi2Component c, fmi2Real x[], size_t n) {                           \
+        return (fmi2Status)g3.f.fn(INST3(c), x, n);                                             \
+    }
+A3_ARRAY_FUNCTION(a3_get_derivatives, GetContinuousStateDerivatives)
+A3_ARRAY_FUNCTION(a3_get_event_indicators, GetEventIndicators)
+A3_ARRAY_FUNCTION(a3_get_continuous_states, GetContinuousStates)
+A3_ARRAY_FUNCTION(a3_get_nominals, GetNominalsOfContinuousStates)
+
+/* The adapters as an Api, for the FMI 3.0 functions in g3. The functions that only the
+ * benchmark or the loading call (fmi2GetTypesPlatform, fmi2GetVersion, fmi2GetInteger,
+ * fmi2SetRealInputDerivatives, fmi2GetBooleanStatus) have none: NULL. */
+static void adapt_api3(Api *api) {
+    *api = (Api){
+        .Instantiate = a3_instantiate,
+        .FreeInstance = a3_free_instance,
+        .SetDebugLogging = a3_set_debug_logging,
+        .SetupExperiment = a3_setup_experiment,
+        .EnterInitializationMode = a3_enter_initialization_mode,
+        .ExitInitializationMode = a3_exit_initialization_mode,
+        .Terminate = a3_terminate,
+        .Reset = a3_reset,
+        .GetReal = a3_get_real,
+        .SetReal = a3_set_real,
+        .SetInteger = a3_set_integer,
+        .GetFMUstate = a3_get_fmu_state,
+        .SetFMUstate = a3_set_fmu_state,
+        .FreeFMUstate = a3_free_fmu_state,
+        .SerializedFMUstateSize = a3_serialized_fmu_state_size,
+        .SerializeFMUstate = a3_serialize_fmu_state,
+        .DeSerializeFMUstate = a3_deserialize_fmu_state,
+        .DoStep = a3_do_step,
+        .GetRealStatus = a3_get_real_status,
+        .EnterEventMode = a3_enter_event_mode,
+        .NewDiscreteStates = a3_new_discrete_states,
+        .EnterContinuousTimeMode = a3_enter_continuous_time_mode,
+        .CompletedIntegratorStep = a3_completed_integrator_step,
+        .SetTime = a3_set_time,
+        .SetContinuousStates = a3_set_continuous_states,
+        .GetDerivatives = a3_get_derivatives,
+        .GetEventIndicators = a3_get_event_indicators,
+        .GetContinuousStates = a3_get_continuous_states,
+        .GetNominalsOfContinuousStates = a3_get_nominals,
+    };
+}
+
+/* Loads the functions of the FMI version the checks run through into *api (with fmi3, the
+ * adapters, and the FMI 3.0 functions into g3 and *api3); the FMI 2.0 functions into *api2,
+ * which the library exports in both archives. */
+static int load_apis(Lib lib, int fmi3, const Model *m, Api *api, Api *api2, Err *err) {
+    if (load_api(lib, api2, err)) return -1;
+    if (!fmi3) {
+        *api = *api2;
+        return 0;
+    }
+    if (load_api3(lib, &g3.f, err)) return -1;
+    g3.time = m->time;
+    adapt_api3(api);
+    return 0;
+}
+
 /* Everything an instance needs from the host. */
 typedef struct {
     const Api *api;
     const Model *model;
-    const char *resources; /* file URI of the FMU's resources folder */
+    const char *resources; /* the FMU's resources folder: a file URI (FMI 2.0), a path (3.0) */
 } Host;
 
 /* The callbacks: the memory functions are given although canNotUseMemoryManagementFunctions is
@@ -1430,6 +1984,313 @@ out:
     return rc;
 }
 
+/* ----- 5 (FMI 3.0): the intermediate-update callback ---------------------------------------- */
+
+#define IU_H 0.0085     /* the communication step: the DefaultExperiment's stepSize */
+#define IU_DT 1e-3      /* intermediate_step */
+#define IU_STEPS 200    /* t = 0 .. 1.7 s = 2 t_rot: the turn, and as long again after it */
+#define IU_TOL 1e-4     /* max |v1 - v1 of the law's run| [m] */
+#define IU_MAX_CALLS 64 /* callbacks recorded in one step */
+
+/* The paper's law, phi = pi sin^2(pi t / (2 t_rot)) for t < t_rot = 0.85 s, then pi, as a host
+ * computes it: with the C library's sin (the FMU's law uses its own). */
+static double paper_phi(double t) {
+    if (t >= 0.85) return PI;
+    double s = sin(PI * t / (2.0 * 0.85));
+    return PI * s * s;
+}
+
+/* The instance environment of check 5: the logger's context first (the logger takes the
+ * environment as a LogCtx), then what the intermediate-update callback needs and records. */
+typedef struct {
+    LogCtx log;
+    const Api3 *f;
+    const Model *m;
+    fmi3Instance inst;
+    int n;                      /* callbacks in the current step */
+    double times[IU_MAX_CALLS]; /* their intermediateUpdateTime */
+    long bad;                   /* callbacks that found something wrong; the first's reason: */
+    char why[512];
+} IuEnv;
+
+/* Sets phi to the law at the time given; checks the flags and that `time` reads that time. */
+static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 t,
+                                fmi3Boolean set_requested, fmi3Boolean get_allowed,
+                                fmi3Boolean step_finished, fmi3Boolean can_return_early,
+                                fmi3Boolean *early, fmi3Float64 *early_time) {
+    IuEnv *e = env;
+    (void)step_finished; /* the FMU's parts are its own steps: either value is right */
+    if (e->n < IU_MAX_CALLS) e->times[e->n] = t;
+    e->n++;
+    char why[400] = "";
+    double phi = paper_phi(t), now_t = NAN;
+    if (!set_requested || !get_allowed || can_return_early || !early || !early_time)
+        snprintf(why, sizeof why,
+                 "intermediateVariableSetRequested = %d, intermediateVariableGetAllowed = %d, "
+                 "canReturnEarly = %d, earlyReturnRequested %s, earlyReturnTime %s",
+                 set_requested, get_allowed, can_return_early, early ? "given" : "NULL",
+                 early_time ? "given" : "NULL");
+    else if (e->f->SetFloat64(e->inst, &e->m->phi, 1, &phi, 1) != fmi3OK)
+        snprintf(why, sizeof why, "fmi3SetFloat64(phi = %.17g) failed: %s", phi, e->log.last);
+    else if (e->f->GetFloat64(e->inst, &e->m->time, 1, &now_t, 1) != fmi3OK || !(now_t == t))
+        snprintf(why, sizeof why, "`time` reads %.17g (%s)", now_t, e->log.last);
+    if (why[0] && e->bad++ == 0)
+        snprintf(e->why, sizeof e->why, "the callback at t = %.17g: %s", t, why);
+}
+
+/* The ends of the parts of a step from the FMU's time `from` to `target` = tc + h, but the
+ * last's, by the FMU's rule (src/fmi/cosim.rs, step_part): intermediate_step while more than
+ * 1.25 of it remains, then the rest. Their number (the callbacks of the step); the first `cap`
+ * into `ends`. */
+static int iu_rule(double from, double target, double dt, double *ends, int cap) {
+    int n = 0;
+    while (from + 1.25 * dt < target && from + dt > from) {
+        from += dt;
+        if (n < cap) ends[n] = from;
+        n++;
+    }
+    return n;
+}
+
+enum { IU_LAW, IU_VALUES, IU_CALLBACK, N_IU_RUNS };
+static const char *const IU_RUNS[N_IU_RUNS] = {"law", "values", "intermediate"};
+
+typedef struct {
+    double v1[IU_STEPS + 1];
+    long calls, expected;
+    int per_step_min, per_step_max;
+} IuRun;
+
+/* One run of IU_STEPS steps of IU_H: phi from the law (IU_LAW), from the host at the
+ * communication points only (IU_VALUES), or also from the callback inside the steps. */
+static int iu_run(const Api3 *f, const Model *m, const char *resources, int mode, IuRun *out,
+                  Err *err) {
+    IuEnv e;
+    memset(&e, 0, sizeof e);
+    ctx_init(&e.log, IU_RUNS[mode]);
+    e.f = f, e.m = m;
+    LogCtx *lc = &e.log;
+    const char *who = e.log.name;
+    const int cb = mode == IU_CALLBACK;
+    const fmi3ValueReference required[1] = {m->phi};
+    fmi3Instance c = f->InstantiateCoSimulation(
+        who, m->guid, resources, fmi3False, fmi3False, fmi3False, fmi3False, cb ? required : NULL,
+        cb ? 1 : 0, &e, logger3, cb ? intermediate_update : NULL);
+    if (!c) return fail(err, "%s: fmi3InstantiateCoSimulation returned NULL (%s)", who, e.log.last);
+    e.inst = c;
+    int rc = -1;
+    const fmi3Int64 source = mode == IU_LAW ? PHI_SOURCE_LAW : PHI_SOURCE_INPUT;
+    const double dt = IU_DT;
+    double phi = paper_phi(0.0), fmu_time = 0.0, ends[IU_MAX_CALLS];
+    OK(f->SetInt64(c, &m->phi_source, 1, &source, 1));
+    if (cb) OK(f->SetFloat64(c, &m->intermediate_step, 1, &dt, 1));
+    if (mode != IU_LAW) OK(f->SetFloat64(c, &m->phi, 1, &phi, 1));
+    OK(f->EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3False, 0.0));
+    OK(f->ExitInitializationMode(c));
+    OK(f->GetFloat64(c, &m->v1, 1, &out->v1[0], 1));
+    out->calls = out->expected = 0;
+    out->per_step_min = 1 << 30, out->per_step_max = 0;
+    for (int k = 1; k <= IU_STEPS; k++) {
+        const double tc = (k - 1) * IU_H;
+        bool event = true, terminate = true, early = true;
+        double last = NAN;
+        if (mode != IU_LAW) {
+            phi = paper_phi(tc);
+            OK(f->SetFloat64(c, &m->phi, 1, &phi, 1));
+        }
+        e.n = 0;
+        OK(f->DoStep(c, tc, IU_H, fmi3True, &event, &terminate, &early, &last));
+        if (event || terminate || early || !(last == tc + IU_H)) {
+            fail(err, "%s: fmi3DoStep(%.17g, %g): eventHandlingNeeded = %d, terminateSimulation "
+                      "= %d, earlyReturn = %d, lastSuccessfulTime = %.17g",
+                 who, tc, IU_H, event, terminate, early, last);
+            goto out;
+        }
+        int want = cb ? iu_rule(fmu_time, tc + IU_H, dt, ends, IU_MAX_CALLS) : 0;
+        if (e.n != want) {
+            fail(err, "%s: %d callbacks in the step from t = %.17g, the rule gives %d", who, e.n,
+                 tc, want);
+            goto out;
+        }
+        for (int j = 0; j < want && j < IU_MAX_CALLS; j++)
+            if (!(e.times[j] == ends[j])) {
+                fail(err, "%s: callback %d of the step from t = %.17g at t = %.17g, the rule "
+                          "gives %.17g",
+                     who, j, tc, e.times[j], ends[j]);
+                goto out;
+            }
+        out->calls += e.n, out->expected += want;
+        if (e.n < out->per_step_min) out->per_step_min = e.n;
+        if (e.n > out->per_step_max) out->per_step_max = e.n;
+        fmu_time = last;
+        OK(f->GetFloat64(c, &m->v1, 1, &out->v1[k], 1));
+        if (!isfinite(out->v1[k])) {
+            fail(err, "%s: v1 = %g at t = %g", who, out->v1[k], k * IU_H);
+            goto out;
+        }
+    }
+    if (e.bad) {
+        fail(err, "%s: %ld callbacks went wrong; %s", who, e.bad, e.why);
+        goto out;
+    }
+    OK(f->Terminate(c));
+    rc = 0;
+out:
+    f->FreeInstance(c);
+    if (rc == 0 && (e.log.count[fmi3Warning] || e.log.count[fmi3Discard] || e.log.count[fmi3Error]))
+        rc = fail(err, "%s: the FMU logged warnings or errors: %s", who, e.log.last);
+    return rc;
+}
+
+static int check_intermediate(const Api3 *f, const Model *m, const char *resources, Err *err) {
+    static IuRun runs[N_IU_RUNS];
+    double t0 = now();
+    for (int mode = 0; mode < N_IU_RUNS; mode++)
+        if (iu_run(f, m, resources, mode, &runs[mode], err)) return -1;
+    double seconds = now() - t0, d = 0.0, d_values = 0.0;
+    const IuRun *law = &runs[IU_LAW], *iu = &runs[IU_CALLBACK];
+    for (int k = 0; k <= IU_STEPS; k++) {
+        d = fmax(d, fabs(iu->v1[k] - law->v1[k]));
+        d_values = fmax(d_values, fabs(runs[IU_VALUES].v1[k] - law->v1[k]));
+    }
+    if (iu->calls == 0) return fail(err, "intermediate: the callback was never called");
+    if (!(d < IU_TOL))
+        return fail(err, "intermediate: max |v1 - v1 of the law's run| = %.3e m > %g", d, IU_TOL);
+    if (!(d < d_values))
+        return fail(err, "intermediate: max |v1 - law's| = %.3e m, not below the run with phi "
+                         "at the communication points only, %.3e m",
+                    d, d_values);
+    printf("intermediate steps=%d h=%g intermediate_step=%g callbacks=%ld expected=%ld "
+           "per_step_min=%d per_step_max=%d max_dv1=%.3e max_dv1_values_only=%.3e seconds=%.3f\n",
+           IU_STEPS, IU_H, IU_DT, iu->calls, iu->expected, iu->per_step_min, iu->per_step_max, d,
+           d_values, seconds);
+    printf("intermediate_final t=%.17g v1=%.17g law_v1=%.17g\n", IU_STEPS * IU_H,
+           iu->v1[IU_STEPS], law->v1[IU_STEPS]);
+    return 0;
+}
+
+/* ----- 6 (FMI 3.0): misuse ------------------------------------------------------------------ */
+
+/* A call on a NULL instance: fmi3Error, and no message (there is no logger to send it to). */
+#define REFUSED_NULL(call)                                                                     \
+    do {                                                                                       \
+        long before_ = atomic_load(&g_messages);                                               \
+        int got_ = (int)(call);                                                                \
+        long logged_ = atomic_load(&g_messages) - before_;                                     \
+        if (got_ != fmi3Error || logged_ != 0) {                                               \
+            fail(err, "%s: line %d: %s returned %s with %ld messages, expected fmi3Error",     \
+                 who, __LINE__, #call, status_name(got_), logged_);                            \
+            goto out;                                                                          \
+        }                                                                                      \
+        refused++;                                                                             \
+    } while (0)
+
+static int check_misuse(const Api *f2, const Api3 *f, const Model *m, const char *resources,
+                        Err *err) {
+    const char *who = "misuse";
+    LogCtx ctx, ctx2, *lc = &ctx;
+    fmi2CallbackFunctions cb2;
+    ctx_init(&ctx, "misuse");
+    ctx_init(&ctx2, "misuse, FMI 2.0");
+    fmi3Instance c = NULL, me = NULL;
+    fmi2Component c2 = NULL;
+    int rc = -1, refused = 0;
+    bool a = false, b = false, d = false, flags[4];
+    double t = 0.0, y3 = 0.0, y2 = 0.0;
+    size_t nx = 0, nz = 0;
+    const fmi3Int64 law = PHI_SOURCE_LAW;
+    const fmi2Integer law2 = PHI_SOURCE_LAW;
+
+    /* A NULL instance. */
+    REFUSED_NULL(f->DoStep(NULL, 0.0, H, fmi3True, &a, &b, &d, &t));
+    REFUSED_NULL(f->GetFloat64(NULL, &m->v1, 1, &y3, 1));
+    REFUSED_NULL(f->EnterInitializationMode(NULL, fmi3False, 0.0, 0.0, fmi3False, 0.0));
+    REFUSED_NULL(f->Terminate(NULL));
+    f->FreeInstance(NULL); /* ignored */
+
+    /* Scheduled execution, which this FMU does not provide: NULL, and one error. */
+    ctx.expect_errors = 1;
+    fmi3Instance se = f->InstantiateScheduledExecution(who, m->guid, resources, fmi3False,
+                                                       fmi3False, &ctx, logger3, NULL, NULL, NULL);
+    ctx.expect_errors = 0;
+    if (se || ctx.count[fmi3Error] != 1) {
+        if (se) f->FreeInstance(se);
+        fail(err, "%s: fmi3InstantiateScheduledExecution returned %p with %ld errors logged, "
+                  "expected NULL and one",
+             who, se, ctx.count[fmi3Error]);
+        goto out;
+    }
+    refused++;
+
+    /* Co-simulation: no configuration mode (no structural parameters), no event mode, no NULL
+     * out-argument. */
+    c = f->InstantiateCoSimulation(who, m->guid, resources, fmi3False, fmi3False, fmi3False,
+                                   fmi3False, NULL, 0, &ctx, logger3, NULL);
+    if (!c) {
+        fail(err, "%s: fmi3InstantiateCoSimulation returned NULL (%s)", who, ctx.last);
+        goto out;
+    }
+    REFUSED(f->EnterConfigurationMode(c));
+    OK(f->SetInt64(c, &m->phi_source, 1, &law, 1));
+    OK(f->EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3True, T_END));
+    OK(f->ExitInitializationMode(c));
+    REFUSED(f->UpdateDiscreteStates(c, &flags[0], &flags[1], &flags[2], &flags[3], &a, &t));
+    REFUSED(f->DoStep(c, 0.0, H, fmi3True, &a, &b, NULL, &t));
+    refused += 3;
+
+    /* An FMI 2.0 instance of the same library: the versions do not mix, either way. */
+    cb2 = (fmi2CallbackFunctions){logger, calloc, free, NULL, &ctx2};
+    c2 = f2->Instantiate(ctx2.name, fmi2CoSimulation, m->guid, NULL, &cb2, fmi2False, fmi2False);
+    if (!c2) {
+        fail(err, "%s: fmi2Instantiate returned NULL (%s)", who, ctx2.last);
+        goto out;
+    }
+    lc = &ctx2;
+    OK(f2->SetupExperiment(c2, fmi2False, 0.0, 0.0, fmi2True, T_END));
+    OK(f2->SetInteger(c2, &m->phi_source, 1, &law2));
+    OK(f2->EnterInitializationMode(c2));
+    OK(f2->ExitInitializationMode(c2));
+    REFUSED(f->DoStep(c2, 0.0, H, fmi3True, &a, &b, &d, &t)); /* logged by the FMI 2.0 logger */
+    OK(f2->DoStep(c2, 0.0, H, fmi2True));
+    OK(f2->GetReal(c2, &m->v1, 1, &y2));
+    lc = &ctx;
+    REFUSED(f2->DoStep(c, 0.0, H, fmi2True)); /* logged by the FMI 3.0 logger */
+    OK(f->DoStep(c, 0.0, H, fmi3True, &a, &b, &d, &t));
+    OK(f->GetFloat64(c, &m->v1, 1, &y3, 1));
+    refused += 2;
+    /* both went on, and are the same model */
+    if (bits(y3) != bits(y2) || y3 == 0.0) {
+        fail(err, "%s: after one step v1 = %.17g through FMI 3.0, %.17g through FMI 2.0", who, y3,
+             y2);
+        goto out;
+    }
+    OK(f->Terminate(c));
+
+    /* Model Exchange: its sizes; co-simulation's step refused. */
+    me = f->InstantiateModelExchange(who, m->guid, resources, fmi3False, fmi3False, &ctx, logger3);
+    if (!me) {
+        fail(err, "%s: fmi3InstantiateModelExchange returned NULL (%s)", who, ctx.last);
+        goto out;
+    }
+    OK(f->GetNumberOfContinuousStates(me, &nx));
+    OK(f->GetNumberOfEventIndicators(me, &nz));
+    if (nx != NX || nz != NZ) {
+        fail(err, "%s: %zu continuous states and %zu event indicators, expected %d and %d", who,
+             nx, nz, NX, NZ);
+        goto out;
+    }
+    REFUSED(f->DoStep(me, 0.0, H, fmi3True, &a, &b, &d, &t));
+    refused++;
+    printf("misuse refused=%d errors_logged=%ld\n", refused,
+           ctx.count[fmi3Error] + ctx2.count[fmi3Error]);
+    rc = 0;
+out:
+    f->FreeInstance(c);
+    f->FreeInstance(me);
+    if (c2) f2->FreeInstance(c2);
+    return rc;
+}
+
 /* dlclose (FreeLibrary), then reports whether the library really left the process: glibc
  * keeps it mapped (DF_1_NODELETE) when it registered thread-local destructors, for instance. */
 static int unload(Lib lib, const char *path, Err *err) {
@@ -1543,7 +2404,7 @@ static int bench_dostep(const Host *h, int rounds, const char *only, double only
 /* ----- main --------------------------------------------------------------------------------- */
 
 static int usage(void) {
-    fprintf(stderr, "usage: host UNZIPDIR [--cycles N] [--threads K] [-o TRAJ.csv] "
+    fprintf(stderr, "usage: host UNZIPDIR [--fmi3] [--cycles N] [--threads K] [-o TRAJ.csv] "
                     "[--me-out TRAJ.csv] [--so LIB] "
                     "[--save-state S STATE.bin] [--resume STATE.bin] "
                     "[--no-dlclose | --reloads R]\n"
@@ -1551,8 +2412,13 @@ static int usage(void) {
     return 2;
 }
 
-/* The FMU's resources folder as a file URI (file:///C:/... on Windows, file:///tmp/... here). */
-static void resources_uri(char *dst, size_t cap, const char *unzipdir) {
+/* The FMU's resources folder as a file URI (file:///C:/... on Windows, file:///tmp/... here);
+ * FMI 3.0 takes it as a path, with a trailing separator. */
+static void resources_uri(char *dst, size_t cap, const char *unzipdir, int fmi3) {
+    if (fmi3) {
+        snprintf(dst, cap, "%s/resources/", unzipdir);
+        return;
+    }
     const char *slash = unzipdir[0] == '/' ? "" : "/";
     snprintf(dst, cap, "file://%s%s/resources", slash, unzipdir);
     for (char *p = dst; *p; p++)
@@ -1561,7 +2427,7 @@ static void resources_uri(char *dst, size_t cap, const char *unzipdir) {
 
 int main(int argc, char **argv) {
     const char *unzipdir = NULL, *out_csv = NULL, *me_csv = NULL, *so = NULL;
-    int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1, bench_rounds = -1;
+    int cycles = 1000, threads = 8, reloads = 0, do_dlclose = 1, bench_rounds = -1, fmi3 = 0;
     const char *bench_only = NULL;
     double bench_h = 0.0;
     StateIO io = {.save_step = -1};
@@ -1592,6 +2458,8 @@ int main(int argc, char **argv) {
             bench_h = atof(argv[++a]);
         else if (!strcmp(argv[a], "--no-dlclose"))
             do_dlclose = 0;
+        else if (!strcmp(argv[a], "--fmi3"))
+            fmi3 = 1;
         else if (argv[a][0] != '-' && !unzipdir)
             unzipdir = argv[a];
         else
@@ -1599,34 +2467,45 @@ int main(int argc, char **argv) {
     }
     if (!unzipdir || cycles < 0 || threads < 0 || threads > 256 || reloads < 0 ||
         (reloads > 0 && !do_dlclose) ||
-        (io.save_file && (io.save_step < 0 || io.save_step > N_STEPS)))
+        (io.save_file && (io.save_step < 0 || io.save_step > N_STEPS)) ||
+        (fmi3 && bench_rounds >= 0))
         return usage();
+    g_fmi = fmi3 ? 3 : 2;
 
     Err err = {{0}};
     Model model;
-    if (read_model(unzipdir, &model, &err)) goto failed;
+    if (read_model(unzipdir, fmi3, &model, &err)) goto failed;
     char lib_path[4096], resources[4200];
     if (so)
         snprintf(lib_path, sizeof lib_path, "%s", so);
     else
-        snprintf(lib_path, sizeof lib_path, "%s/%s", unzipdir, LIB_DEFAULT);
-    resources_uri(resources, sizeof resources, unzipdir);
+        snprintf(lib_path, sizeof lib_path, "%s/%s", unzipdir, fmi3 ? LIB_DEFAULT3 : LIB_DEFAULT);
+    resources_uri(resources, sizeof resources, unzipdir, fmi3);
 
     Lib lib = lib_open(lib_path);
     if (!lib) {
         fail(&err, "loading %s: %s", lib_path, lib_error());
         goto failed;
     }
-    Api api;
-    if (load_api(lib, &api, &err)) goto failed;
+    /* api: the functions checks 1-4 call (with --fmi3, FMI 3.0 through adapters); api2: FMI
+     * 2.0's, for the mixing of versions in check 6 */
+    Api api, api2;
+    if (load_apis(lib, fmi3, &model, &api, &api2, &err)) goto failed;
     Host host = {&api, &model, resources};
     if (bench_rounds >= 0) return bench_dostep(&host, bench_rounds, bench_only, bench_h, &err) ? (fprintf(stderr, "host: FAILED: %s\n", err.msg), 1) : 0;
-    printf("host library=%s guid=%s\n", lib_path, model.guid);
+    if (fmi3)
+        printf("host library=%s fmi=3.0 exports=%zu instantiationToken=%s\n", lib_path,
+               N_EXPORTS3, model.guid);
+    else
+        printf("host library=%s guid=%s\n", lib_path, model.guid);
 
     if (check_scene(&host, out_csv, &io, &err)) goto failed;
     if (check_cycles(&host, cycles, &err)) goto failed;
     if (threads > 0 && check_threads(&host, threads, &err)) goto failed;
     if (check_exchange(&host, me_csv, &err)) goto failed;
+    if (fmi3 && (check_intermediate(&g3.f, &model, resources, &err) ||
+                 check_misuse(&api2, &g3.f, &model, resources, &err)))
+        goto failed;
 
     long bad = atomic_load(&g_bad_log);
     if (bad) {
@@ -1644,9 +2523,9 @@ int main(int argc, char **argv) {
                 fail(&err, "reload %d: loading %s: %s", r, lib_path, lib_error());
                 goto failed;
             }
-            Api again;
+            Api again, again2;
             Host h2 = {&again, &model, resources};
-            if (load_api(lib, &again, &err) || one_cycle(&h2, 4, &err) ||
+            if (load_apis(lib, fmi3, &model, &again, &again2, &err) || one_cycle(&h2, 4, &err) ||
                 one_cycle(&h2, 5, &err) || unload(lib, lib_path, &err))
                 goto failed;
         }

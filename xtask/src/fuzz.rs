@@ -27,13 +27,13 @@ use beam_body::fmu::variables::{guid, Var};
 use crate::{cargo, project_root, relative, target_dir, Result};
 
 /// The fuzz targets (`fuzz/fuzz_targets/*.rs`).
-pub const TARGETS: [&str; 2] = ["deserialize", "api_sequence"];
+pub const TARGETS: [&str; 3] = ["deserialize", "api_sequence", "api_sequence3"];
 
 /// Seconds per target of `cargo xtask test`'s smoke run.
 pub const SMOKE_SECONDS: u64 = 15;
 
 const HELP: &str = "usage: cargo xtask fuzz [--time SECONDS] [TARGET...]   (targets: deserialize, \
-                    api_sequence; default: both, 600 s each)";
+                    api_sequence, api_sequence3; default: all, 600 s each)";
 
 /// What one fuzzing run did.
 pub struct Outcome {
