@@ -131,10 +131,89 @@ pub fn run(all: bool) -> Result {
     write_csv(&fmu_csv, &run.rows)?;
     print_fmu_run(&run, &dir, &fmu_csv);
     compare(&run.rows, &reference_csv, &fmu_csv)?;
-    match run.state_mismatch {
-        None => Ok(()),
-        Some(err) => Err(err.into()),
+    if let Some(err) = run.state_mismatch {
+        return Err(err.into());
     }
+
+    // The same scene through FMI 3.0: the same library and core, so the same bits.
+    let dir3 = out_dir.join(format!("{MODEL_IDENTIFIER}-fmi3"));
+    extract(&packages.fmi3, &dir3)?;
+    let started = Instant::now();
+    let rows3 = run_fmu3(&dir3)?;
+    let wall = started.elapsed().as_secs_f64();
+    println!(
+        "
+{} through the native FMI 3.0 host: {} x fmi3DoStep, {:.1} us per step",
+        relative(&packages.fmi3),
+        rows3.len() - 1,
+        wall * 1e6 / (rows3.len() - 1) as f64
+    );
+    match rows3.iter().zip(&run.rows).position(|(a, b)| a.map(f64::to_bits) != b.map(f64::to_bits))
+    {
+        None if rows3.len() == run.rows.len() => {
+            println!("  identical to the FMI 2.0 run, bit for bit, at all {} points", rows3.len());
+            Ok(())
+        }
+        k => Err(format!(
+            "the FMI 3.0 run differs from the FMI 2.0 run (same library, same core) at row {k:?} \
+             of {} against {}",
+            rows3.len(),
+            run.rows.len()
+        )
+        .into()),
+    }
+}
+
+/// The paper's scene with the law through FMI 3.0 (fmi3EnterInitializationMode with the
+/// DefaultExperiment, fmi3DoStep at its step): t and the [`RECORDED`] outputs at every point.
+fn run_fmu3(dir: &Path) -> Result<Vec<[f64; 4]>> {
+    use crate::import::{Call as _, CoSimulation3, Common3, GetSet3};
+    let fmu = crate::import::Fmu3::load(dir)?;
+    let ex = DEFAULT_EXPERIMENT;
+    let points = communication_points(ex.start_time, ex.stop_time, ex.step_size);
+    let vrs = RECORDED.map(Var::vr);
+    let law = PHI_SOURCE_TYPE
+        .items
+        .iter()
+        .position(|(name, _)| *name == "law")
+        .ok_or("the PhiSource enumeration has no item `law`")? as i64
+        + 1;
+    let mut instance = fmu.instantiate(MODEL_IDENTIFIER)?;
+    let version = instance.get_version().to_owned();
+    if version != "3.0" {
+        return Err(format!("fmi3GetVersion returned {version:?}, not \"3.0\"").into());
+    }
+    instance.set_int64(&[Var::PhiSource.vr()], &[law]).call("fmi3SetInt64")?;
+    let (tolerance, stop) = (Some(ex.tolerance), Some(ex.stop_time));
+    instance
+        .enter_initialization_mode(tolerance, ex.start_time, stop)
+        .call("fmi3EnterInitializationMode")?;
+    instance.exit_initialization_mode().call("fmi3ExitInitializationMode")?;
+    let mut rows = Vec::with_capacity(points.len());
+    let mut read = |instance: &mut crate::import::InstanceCS3, t: f64| -> Result {
+        let mut values = [0.0; 3];
+        instance.get_float64(&vrs, &mut values).call("fmi3GetFloat64")?;
+        rows.push([t, values[0], values[1], values[2]]);
+        Ok(())
+    };
+    read(&mut instance, points[0])?;
+    for pair in points.windows(2) {
+        let (tc, h) = (pair[0], pair[1] - pair[0]);
+        let (mut event, mut terminate, mut early, mut last) = (false, false, false, f64::NAN);
+        instance
+            .do_step(tc, h, true, &mut event, &mut terminate, &mut early, &mut last)
+            .call("fmi3DoStep")?;
+        if event || terminate || early || last != pair[1] {
+            return Err(format!(
+                "fmi3DoStep({tc}, {h}): eventHandlingNeeded {event}, terminateSimulation \
+                 {terminate}, earlyReturn {early}, lastSuccessfulTime {last}"
+            )
+            .into());
+        }
+        read(&mut instance, pair[1])?;
+    }
+    instance.terminate().call("fmi3Terminate")?;
+    Ok(rows)
 }
 
 fn mib(bytes: u64) -> String {

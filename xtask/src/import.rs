@@ -1,5 +1,6 @@
-//! The native FMI 2.0 host: the importer of the `fmi` crate (rust-fmi), which dlopens the
-//! FMU's binary and calls it through the C ABI as a simulation tool does, and what xtask adds:
+//! The native FMI 2.0 and 3.0 host: the importers of the `fmi` crate (rust-fmi), which dlopen
+//! the FMU's binary and call it through the C ABI as a simulation tool does, and what xtask
+//! adds:
 //!
 //! - [`Fmu2::load`] opens an *extracted* FMU. The importer opens only a .fmu, which it
 //!   extracts into a temporary directory of its own ([`fmi::import::from_path`]); here that
@@ -24,8 +25,15 @@ use fmi::fmi2::import::Fmi2Import;
 pub use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS, InstanceME, ModelExchange};
 pub use fmi::fmi2::Fmi2Error;
 use fmi::fmi2::{Fmi2Res, Fmi2Status};
+use fmi::fmi3::binding::Fmi3Binding;
+use fmi::fmi3::import::Fmi3Import;
+pub use fmi::fmi3::instance::InstanceCS as InstanceCS3;
+pub use fmi::fmi3::{
+    CoSimulation as CoSimulation3, Common as Common3, Fmi3Error, Fmi3Model, GetSet as GetSet3,
+};
 use fmi::traits::{FmiImport, FmiStatus};
 pub use fmi::EventFlags;
+use tempfile::TempDir;
 
 use crate::{relative, Result};
 
@@ -40,26 +48,7 @@ impl Fmu2 {
     /// Loads the FMU extracted in `dir`: `modelDescription.xml` and this machine's library,
     /// `binaries/linux64/<modelIdentifier>.so` on Linux x86-64 (rust-fmi picks the folder).
     pub fn load(dir: &Path) -> Result<Fmu2> {
-        static LOGGER: Once = Once::new();
-        LOGGER.call_once(|| {
-            if log::set_logger(&MESSAGES).is_ok() {
-                log::set_max_level(log::LevelFilter::Warn);
-            }
-        });
-        let md = dir.join("modelDescription.xml");
-        let xml = std::fs::read_to_string(&md)
-            .map_err(|err| format!("cannot read {}: {err}", relative(&md)))?;
-        let dir = std::path::absolute(dir)?;
-        let links = tempfile::Builder::new().prefix("xtask-fmu-").tempdir()?;
-        for name in ["binaries", "resources"] {
-            let (target, link) = (dir.join(name), links.path().join(name));
-            if target.exists() {
-                #[cfg(unix)]
-                std::os::unix::fs::symlink(&target, &link)?;
-                #[cfg(windows)]
-                std::os::windows::fs::symlink_dir(&target, &link)?;
-            }
-        }
+        let (md, xml, dir, links) = linked(dir)?;
         let import =
             Fmi2Import::new(links, &xml).map_err(|err| format!("{}: {err}", relative(&md)))?;
         let cs = import.model_description().co_simulation.as_ref();
@@ -85,12 +74,80 @@ impl Fmu2 {
     }
 }
 
+/// The logger, set once; the extracted FMU in `dir`: its modelDescription's path and text, the
+/// directory, and a temporary directory that links to its `binaries/` and `resources/`.
+fn linked(dir: &Path) -> Result<(std::path::PathBuf, String, std::path::PathBuf, TempDir)> {
+    static LOGGER: Once = Once::new();
+    LOGGER.call_once(|| {
+        if log::set_logger(&MESSAGES).is_ok() {
+            log::set_max_level(log::LevelFilter::Warn);
+        }
+    });
+    let md = dir.join("modelDescription.xml");
+    let xml = std::fs::read_to_string(&md)
+        .map_err(|err| format!("cannot read {}: {err}", relative(&md)))?;
+    let dir = std::path::absolute(dir)?;
+    let links = tempfile::Builder::new().prefix("xtask-fmu-").tempdir()?;
+    for name in ["binaries", "resources"] {
+        let (target, link) = (dir.join(name), links.path().join(name));
+        if target.exists() {
+            #[cfg(unix)]
+            std::os::unix::fs::symlink(&target, &link)?;
+            #[cfg(windows)]
+            std::os::windows::fs::symlink_dir(&target, &link)?;
+        }
+    }
+    Ok((md, xml, dir, links))
+}
+
 fn instantiation_error(err: fmi::Error) -> Box<dyn std::error::Error> {
     let text = match err {
         fmi::Error::Instantiation => "fmi2Instantiate returned NULL".to_string(),
         err => format!("fmi2Instantiate: {err}"),
     };
     with_messages(text).into()
+}
+
+/// A loaded FMI 3.0 FMU (`BeamBody-fmi3.fmu` extracted): the importer, and its library.
+pub struct Fmu3 {
+    import: Fmi3Import,
+    _library: Fmi3Binding,
+}
+
+impl Fmu3 {
+    /// Loads the FMU extracted in `dir`, this machine's library from its platform-tuple
+    /// folder (`binaries/x86_64-linux/` on Linux x86-64).
+    pub fn load(dir: &Path) -> Result<Fmu3> {
+        let (md, xml, dir, links) = linked(dir)?;
+        let import =
+            Fmi3Import::new(links, &xml).map_err(|err| format!("{}: {err}", relative(&md)))?;
+        let cs = import.model_description().co_simulation.as_ref();
+        let id = cs.ok_or_else(|| format!("{} has no CoSimulation", relative(&md)))?;
+        let so = dir.join(import.shared_lib_path(&id.model_identifier)?);
+        let library = import
+            .binding(&id.model_identifier)
+            .map_err(|err| format!("cannot load {}: {err}", relative(&so)))?;
+        Ok(Fmu3 { import, _library: library })
+    }
+
+    /// `fmi3InstantiateCoSimulation` with the instantiationToken, without event mode, early
+    /// return or intermediate variables.
+    pub fn instantiate(&self, name: &str) -> Result<InstanceCS3> {
+        take_messages();
+        self.import.instantiate_cs(name, false, false, false, false, &[]).map_err(|err| {
+            let text = match err {
+                fmi::Error::Instantiation => "fmi3InstantiateCoSimulation returned NULL".into(),
+                err => format!("fmi3InstantiateCoSimulation: {err}"),
+            };
+            with_messages(text).into()
+        })
+    }
+}
+
+impl<T> Call<T> for std::result::Result<T, Fmi3Error> {
+    fn call(self, function: &str) -> Result<T> {
+        self.map_err(|err| with_messages(format!("{function} returned fmi3{err}")).into())
+    }
 }
 
 /// What a call returned, as xtask's `Result`.

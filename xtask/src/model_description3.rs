@@ -24,7 +24,7 @@
 use beam_body::fmu::variables::{
     self as vars, Causality, Type, Var, Variability, Variable, CAPABILITIES, DERIVATIVES,
     ENUM_TYPES, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES, INDICATOR_VARIABLES, INTERMEDIATE_INPUTS,
-    VARIABLES,
+    UNITS, VARIABLES,
 };
 
 use crate::model_description::{
@@ -160,6 +160,11 @@ pub fn generate() -> Result<String> {
     write_units(&mut doc);
 
     doc.start("TypeDefinitions", vec![]);
+    // A variable's unit comes with its declared type, one per unit, named after it (rust-fmi
+    // 0.8, fmi-sim among its users, refuses `unit` on a <Float64> variable, which FMI 3.0 allows).
+    for unit in UNITS {
+        doc.empty("Float64Type", vec![("name", unit.name.into()), ("unit", unit.name.into())]);
+    }
     for ty in ENUM_TYPES {
         doc.start(
             "EnumerationType",
@@ -223,7 +228,10 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
     }
     let element = match v.ty {
         Type::Real { unit, start, min, max } => {
-            attrs.extend(real_attrs(unit, start, min, max)?);
+            if let Some(unit) = unit {
+                attrs.push(("declaredType", unit.into()));
+            }
+            attrs.extend(real_attrs(None, start, min, max)?);
             if let Some(state) = v.derivative_of {
                 // FMI 3.0 names the state by its value reference.
                 attrs.push(("derivative", state.to_string()));
@@ -255,7 +263,7 @@ mod tests {
     use beam_body::fmu::variables::{
         self as vars, Causality, Type, Var, Variability, CAPABILITIES, DERIVATIVES, ENUM_TYPES,
         EVENT_INDICATORS, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES, INDICATOR_VARIABLES,
-        INTERMEDIATE_INPUTS, VARIABLES,
+        INTERMEDIATE_INPUTS, UNITS, VARIABLES,
     };
 
     use super::generate;
@@ -407,7 +415,13 @@ mod tests {
         }
 
         let types = &root.child("TypeDefinitions").unwrap().children;
-        assert_eq!(types.len(), ENUM_TYPES.len());
+        assert_eq!(types.len(), UNITS.len() + ENUM_TYPES.len());
+        let (floats, types) = types.split_at(UNITS.len());
+        for (e, unit) in floats.iter().zip(UNITS) {
+            assert_eq!(e.name, "Float64Type");
+            let a = attrs(e, &["name", "unit"]);
+            assert_eq!((a["name"], a["unit"]), (unit.name, unit.name));
+        }
         for (e, ty) in types.iter().zip(ENUM_TYPES) {
             assert_eq!(e.name, "EnumerationType");
             let a = attrs(e, &["name", "description"]);
@@ -441,7 +455,9 @@ mod tests {
                 "initial",
             ];
             let (element, extra): (&str, &[&str]) = match v.ty {
-                Type::Real { .. } => ("Float64", &["unit", "start", "min", "max", "derivative"]),
+                Type::Real { .. } => {
+                    ("Float64", &["declaredType", "start", "min", "max", "derivative"])
+                }
                 Type::Integer { .. } => ("Int32", &["start", "min", "max"]),
                 Type::Enumeration { .. } => ("Enumeration", &["declaredType", "start"]),
                 Type::Boolean { .. } => ("Boolean", &["start"]),
@@ -476,7 +492,8 @@ mod tests {
                     // FMI 3.0: a derivative names its state by its value reference.
                     let derivative = a.get("derivative").map(|k| k.parse::<u32>().unwrap());
                     assert_eq!(derivative, v.derivative_of, "{}", at("derivative"));
-                    assert_eq!(a.get("unit").copied(), unit, "{}", at("unit"));
+                    // The unit by the declared type of its name (see `generate`).
+                    assert_eq!(a.get("declaredType").copied(), unit, "{}", at("unit"));
                     for (key, value) in [("start", start), ("min", min), ("max", max)] {
                         let written = a.get(key).map(|x| f64_of(x).to_bits());
                         assert_eq!(written, value.map(f64::to_bits), "{}", at(key));
