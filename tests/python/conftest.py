@@ -190,6 +190,14 @@ def fmu_unzipdir(fmu_file, tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="session")
+def fmu3_unzipdir(fmu3_file, tmp_path_factory) -> Path:
+    """The FMI 3.0 FMU extracted once per session (for the C host's --fmi3 checks)."""
+    import fmpy
+
+    return Path(fmpy.extract(str(fmu3_file), unzipdir=str(tmp_path_factory.mktemp("BeamBody_fmi3_fmu"))))
+
+
+@pytest.fixture(scope="session")
 def fmu_report():
     """target/fmu-report.txt: measured figures, one per line, appended per session."""
     import fmu_util

@@ -6,6 +6,7 @@
   (src/model/phi.rs, PhiPiece::Turn / Hold), so that samples are bit-identical to the CLI's;
 - CLI runs (`beam-body simulate scenes/paper.toml --set ...`), cached per session;
 - `Slave`: a thin wrapper of fmpy.fmi2.FMU2Slave with a logger that collects the FMU's messages;
+- `Slave3`: the same over fmpy.fmi3.FMU3Slave for the FMI 3.0 archive (and `replay3`);
 - for hosts written by others (test_fmu_libcosim.py, test_fmu_ecos.py): a copy of the FMU that traces
   every FMI call the host makes (`traced_fmu`, tests/python/trace_shim.c), a reader of that trace, and
   `replay`, FMPy making the calls a host made;
@@ -338,6 +339,96 @@ def assert_host_matches_fmpy(host: str, run: dict, steps, unzipdir, model_descri
         report.figure(host, f"max|{host}-FMPy| {q}", d, comment)
         assert d == 0.0, f"{q}: {host} and FMPy making the same calls differ by {d}"
         assert k <= k_grid, f"{q}: {host} vs FMPy on the plain grid differ by {k:.0f} rtol*max|y|"
+
+
+# --------------------------------------------------------------------------------------------------
+# FMU3Slave (the FMI 3.0 archive)
+# --------------------------------------------------------------------------------------------------
+
+# FMI 3.0's logger has no global proxy in FMPy (fmi3InstantiateCoSimulation takes the callback itself,
+# and FMU3Slave keeps it alive), so each Slave3 collects its own messages.
+
+
+class Slave3:
+    """An instance of the FMI 3.0 FMU through fmpy.fmi3.FMU3Slave. Its log messages (status, category,
+    message) are collected in `messages`. `intermediate_update`, a Python function with the signature of
+    fmi3IntermediateUpdateCallback (instanceEnvironment, intermediateUpdateTime,
+    intermediateVariableSetRequested, intermediateVariableGetAllowed, intermediateStepFinished,
+    canReturnEarly, earlyReturnRequested*, earlyReturnTime*), and `required`, the names listed in
+    requiredIntermediateVariables, go to fmi3InstantiateCoSimulation."""
+
+    def __init__(self, unzipdir, model_description, name="instance", logging_on=False,
+                 intermediate_update=None, required=(), event_mode_used=False):
+        from fmpy.fmi3 import FMU3Slave
+
+        self.name = name
+        self.md = model_description
+        self.vr = {v.name: v.valueReference for v in model_description.modelVariables}
+        self.messages: list[tuple[int, str, str]] = []
+
+        def log(_env, status, category, message):
+            self.messages.append((int(status), (category or b"").decode("utf-8", "replace"),
+                                  (message or b"").decode("utf-8", "replace")))
+
+        self.freed = False
+        self.fmu = FMU3Slave(
+            guid=model_description.guid,
+            unzipDirectory=str(unzipdir),
+            modelIdentifier=model_description.coSimulation.modelIdentifier,
+            instanceName=name,
+        )
+        self.fmu.instantiate(loggingOn=logging_on, eventModeUsed=event_mode_used, logMessage=log,
+                             intermediateUpdate=intermediate_update,
+                             requiredIntermediateVariables=[self.vr[n] for n in required] or None)
+
+    def start(self, tolerance=None, start_time=0.0, stop_time=None, int64=None, reals=None, phi0=None):
+        """Parameters (Int64 for the enumerations, Float64), enterInitializationMode (with the
+        experiment's tolerance and times), (phi), exitInitializationMode."""
+        f = self.fmu
+        for name, value in (int64 or {}).items():
+            f.setInt64([self.vr[name]], [int(value)])
+        for name, value in (reals or {}).items():
+            f.setFloat64([self.vr[name]], [float(value)])
+        f.enterInitializationMode(tolerance=tolerance, startTime=start_time, stopTime=stop_time)
+        if phi0 is not None:
+            f.setFloat64([self.vr["phi"]], [float(phi0)])
+        f.exitInitializationMode()
+        return self
+
+    def get(self, names=OUTPUTS) -> list[float]:
+        return self.fmu.getFloat64([self.vr[n] for n in names])
+
+    def step_input(self, tc, h, phi=None):
+        """setFloat64(phi) (when given), doStep(tc, h): (eventHandlingNeeded, terminateSimulation,
+        earlyReturn, lastSuccessfulTime)."""
+        if phi is not None:
+            self.fmu.setFloat64([self.vr["phi"]], [float(phi)])
+        return self.fmu.doStep(tc, h)
+
+    def free(self):
+        if not self.freed:
+            self.freed = True
+            self.fmu.freeInstance()
+
+    def errors(self, min_status=2):
+        return [m for m in self.messages if m[0] >= min_status]
+
+
+def replay3(unzipdir, model_description, steps, name, names=STATES):
+    """replay() on the FMI 3.0 FMU: a fresh Slave3 through `steps` (tc, h, phi) after
+    enterInitializationMode with neither tolerance nor stop time and no parameter set; the rows of
+    `names` after each step."""
+    s = Slave3(unzipdir, model_description, name=name)
+    try:
+        s.start(tolerance=None, stop_time=None)
+        rows = []
+        for tc, h, phi in steps:
+            s.step_input(tc, h, phi)
+            rows.append(s.get(names))
+        assert not s.errors(), s.errors()
+        return np.array(rows)
+    finally:
+        s.free()
 
 
 # --------------------------------------------------------------------------------------------------

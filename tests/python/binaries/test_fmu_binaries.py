@@ -14,10 +14,28 @@ binaries/aarch64-linux/ (for hosts that look for linux64 only); any other binary
 byte-identical to the main FMU's. Its checks run when the variable is set; when it is not, they
 skip, and with $CI set its test_binaries_layout fails.
 
+The FMI 3.0 archive (fmu3_file: $BEAM_BODY_FMU_FMI3, else target/fmu/BeamBody-fmi3.fmu) holds the same
+libraries in FMI 3.0's platform-tuple folders:
+
+    binaries/x86_64-linux/BeamBody.so       ELF x86-64          = the FMI 2.0 archive's linux64
+    binaries/aarch64-linux/BeamBody.so      ELF aarch64         = aarch64-linux
+    binaries/x86_64-windows/BeamBody.dll    PE32+ x86-64        = win64
+    binaries/x86_64-darwin/BeamBody.dylib   Mach-O thin x86_64  = darwin64's x86_64 slice
+    binaries/aarch64-darwin/BeamBody.dylib  Mach-O thin arm64   = aarch64-darwin
+
+x86_64-linux always; the other four when the all-platforms build ran (`cargo xtask fmu --all-platforms`,
+which `cargo xtask test` runs: the FMI 2.0 archive then holds its cross-built folders too), and then all
+four (a partial set fails test_binaries_layout). When it did not, their checks skip, and with $CI set
+they fail. Every binary of the FMI 3.0 archive gets the checks below, and
+test_fmi3_binaries_are_the_fmi2_libraries checks that each is byte for byte the FMI 2.0 archive's library
+(or, for x86_64-darwin, the x86_64 slice of its universal dylib), which the same checks cover there.
+
 For each binary (each slice of a universal one):
 - the format and machine its folder promises;
-- the exports are exactly the 44 FMI 2.0 functions (25 common + 9 co-simulation + 10 Model Exchange; Mach-O names carry
-  a leading underscore), nothing more: a host resolves these by name, and anything else is a leak;
+- the exports are exactly the 44 FMI 2.0 functions (25 common + 9 co-simulation + 10 Model Exchange) and the 75 FMI 3.0
+  functions (61 common + 10 Model Exchange + 3 co-simulation + 1 scheduled execution), one library for both archives
+  (Mach-O names carry a leading underscore), nothing more: a host resolves these by name, and anything else is a
+  leak;
 - no sin, cos, tan, exp, log, log2, log10, pow, atan2, hypot, fma, cbrt (or float/sincos variants,
   or msvcrt's _hypot) is imported: the library carries its own libm (src/math.rs) so that every
   platform computes the same bits, and a platform libm would silently break that;
@@ -109,6 +127,107 @@ assert len(FMI2_COMMON_FUNCTIONS) == 25 and len(FMI2_CO_SIMULATION_FUNCTIONS) ==
 assert len(FMI2_MODEL_EXCHANGE_FUNCTIONS) == 10
 assert len(set(FMI2_FUNCTIONS)) == 44
 
+#: FMI 3.0 standard, headers/fmi3Functions.h (FMI-Standard-3.0), in its order: "Common Functions".
+FMI3_COMMON_FUNCTIONS = (
+    # Inquire version numbers and set debug logging
+    "fmi3GetVersion",
+    "fmi3SetDebugLogging",
+    # Creation and destruction of FMU instances
+    "fmi3InstantiateModelExchange",
+    "fmi3InstantiateCoSimulation",
+    "fmi3InstantiateScheduledExecution",
+    "fmi3FreeInstance",
+    # Enter and exit initialization mode, terminate and reset
+    "fmi3EnterInitializationMode",
+    "fmi3ExitInitializationMode",
+    "fmi3EnterEventMode",
+    "fmi3Terminate",
+    "fmi3Reset",
+    # Getting and setting variable values
+    "fmi3GetFloat32",
+    "fmi3GetFloat64",
+    "fmi3GetInt8",
+    "fmi3GetUInt8",
+    "fmi3GetInt16",
+    "fmi3GetUInt16",
+    "fmi3GetInt32",
+    "fmi3GetUInt32",
+    "fmi3GetInt64",
+    "fmi3GetUInt64",
+    "fmi3GetBoolean",
+    "fmi3GetString",
+    "fmi3GetBinary",
+    "fmi3GetClock",
+    "fmi3SetFloat32",
+    "fmi3SetFloat64",
+    "fmi3SetInt8",
+    "fmi3SetUInt8",
+    "fmi3SetInt16",
+    "fmi3SetUInt16",
+    "fmi3SetInt32",
+    "fmi3SetUInt32",
+    "fmi3SetInt64",
+    "fmi3SetUInt64",
+    "fmi3SetBoolean",
+    "fmi3SetString",
+    "fmi3SetBinary",
+    "fmi3SetClock",
+    # Getting Variable Dependency Information
+    "fmi3GetNumberOfVariableDependencies",
+    "fmi3GetVariableDependencies",
+    # Getting and setting the internal FMU state
+    "fmi3GetFMUState",
+    "fmi3SetFMUState",
+    "fmi3FreeFMUState",
+    "fmi3SerializedFMUStateSize",
+    "fmi3SerializeFMUState",
+    "fmi3DeserializeFMUState",
+    # Getting partial derivatives
+    "fmi3GetDirectionalDerivative",
+    "fmi3GetAdjointDerivative",
+    # Entering and exiting the Configuration or Reconfiguration Mode
+    "fmi3EnterConfigurationMode",
+    "fmi3ExitConfigurationMode",
+    # Clock related functions
+    "fmi3GetIntervalDecimal",
+    "fmi3GetIntervalFraction",
+    "fmi3GetShiftDecimal",
+    "fmi3GetShiftFraction",
+    "fmi3SetIntervalDecimal",
+    "fmi3SetIntervalFraction",
+    "fmi3SetShiftDecimal",
+    "fmi3SetShiftFraction",
+    "fmi3EvaluateDiscreteStates",
+    "fmi3UpdateDiscreteStates",
+)
+#: fmi3Functions.h, "Functions for Model Exchange".
+FMI3_MODEL_EXCHANGE_FUNCTIONS = (
+    "fmi3EnterContinuousTimeMode",
+    "fmi3CompletedIntegratorStep",
+    "fmi3SetTime",
+    "fmi3SetContinuousStates",
+    "fmi3GetContinuousStateDerivatives",
+    "fmi3GetEventIndicators",
+    "fmi3GetContinuousStates",
+    "fmi3GetNominalsOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators",
+    "fmi3GetNumberOfContinuousStates",
+)
+#: fmi3Functions.h, "Functions for Co-Simulation" (Simulating the FMU).
+FMI3_CO_SIMULATION_FUNCTIONS = (
+    "fmi3EnterStepMode",
+    "fmi3GetOutputDerivatives",
+    "fmi3DoStep",
+)
+#: fmi3Functions.h, "Functions for Scheduled Execution" (the FMU returns fmi3Error: it has none).
+FMI3_SCHEDULED_EXECUTION_FUNCTIONS = ("fmi3ActivateModelPartition",)
+FMI3_FUNCTIONS = (FMI3_COMMON_FUNCTIONS + FMI3_MODEL_EXCHANGE_FUNCTIONS + FMI3_CO_SIMULATION_FUNCTIONS
+                  + FMI3_SCHEDULED_EXECUTION_FUNCTIONS)
+assert len(FMI3_COMMON_FUNCTIONS) == 61 and len(FMI3_MODEL_EXCHANGE_FUNCTIONS) == 10
+assert len(FMI3_CO_SIMULATION_FUNCTIONS) == 3 and len(set(FMI3_FUNCTIONS)) == 75
+#: What every library exports: one library serves both archives.
+EXPORTED_FUNCTIONS = FMI2_FUNCTIONS + FMI3_FUNCTIONS
+
 #: The C library's math functions the model must not import (it uses its own libm, src/math.rs).
 MATH_FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "log2", "log10", "pow", "atan2", "hypot", "fma", "cbrt")
 FORBIDDEN_MATH = frozenset(
@@ -162,7 +281,25 @@ AARCH64_LINUX_LAYOUT = {
     "binaries/aarch64-linux/BeamBody.so": Expect("elf", ("aarch64",)),
 }
 AARCH64_LINUX_ENV = "BEAM_BODY_FMU_AARCH64_LINUX"
-ARCHIVES = {"fmu": LAYOUT, "aarch64-linux-fmu": AARCH64_LINUX_LAYOUT}
+#: The FMI 3.0 archive: FMI 3.0's platform tuples, one architecture per folder.
+FMI3_LAYOUT = {
+    "binaries/x86_64-linux/BeamBody.so": Expect("elf", ("x86_64",)),
+    "binaries/aarch64-linux/BeamBody.so": Expect("elf", ("aarch64",)),
+    "binaries/x86_64-windows/BeamBody.dll": Expect("pe", ("x86_64",)),
+    "binaries/x86_64-darwin/BeamBody.dylib": Expect("macho", ("x86_64",)),
+    "binaries/aarch64-darwin/BeamBody.dylib": Expect("macho", ("arm64",)),
+}
+#: In every build of the FMI 3.0 archive; the others come with the all-platforms build.
+FMI3_ALWAYS = "binaries/x86_64-linux/BeamBody.so"
+#: The FMI 2.0 archive's library each FMI 3.0 binary is, and the slice (Mach-O universal) or None.
+FMI3_SAME_AS = {
+    "binaries/x86_64-linux/BeamBody.so": ("binaries/linux64/BeamBody.so", None),
+    "binaries/aarch64-linux/BeamBody.so": ("binaries/aarch64-linux/BeamBody.so", None),
+    "binaries/x86_64-windows/BeamBody.dll": ("binaries/win64/BeamBody.dll", None),
+    "binaries/x86_64-darwin/BeamBody.dylib": ("binaries/darwin64/BeamBody.dylib", "x86_64"),
+    "binaries/aarch64-darwin/BeamBody.dylib": ("binaries/aarch64-darwin/BeamBody.dylib", None),
+}
+ARCHIVES = {"fmu": LAYOUT, "aarch64-linux-fmu": AARCH64_LINUX_LAYOUT, "fmu3": FMI3_LAYOUT}
 CASES = [(archive, member) for archive, layout in ARCHIVES.items() for member in layout]
 
 
@@ -184,6 +321,8 @@ def archive_path(request, archive: str, layout_test: bool = False) -> Path:
     test_binaries_layout fails when $CI is set (one clear failure, not one per check)."""
     if archive == "fmu":
         return request.getfixturevalue("fmu_file")
+    if archive == "fmu3":
+        return request.getfixturevalue("fmu3_file")
     env = os.environ.get(AARCH64_LINUX_ENV)
     if not env:
         if os.environ.get("CI") and layout_test:
@@ -202,16 +341,41 @@ def archive_path(request, archive: str, layout_test: bool = False) -> Path:
     return path
 
 
+def binaries_in(path: Path) -> set[str]:
+    with zipfile.ZipFile(path) as z:
+        return {n for n in z.namelist() if n.startswith("binaries/") and not n.endswith("/")}
+
+
+def all_platforms_built(request) -> bool:
+    """Whether the archives come from the all-platforms build: the FMI 2.0 archive or the FMI 3.0
+    archive holds a cross-built folder (a host-only `cargo xtask fmu` writes this machine's only). Under
+    $CI, always (the suite builds every platform there)."""
+    if os.environ.get("CI"):
+        return True
+    main = binaries_in(request.getfixturevalue("fmu_file"))
+    fmi3 = binaries_in(request.getfixturevalue("fmu3_file"))
+    return bool(main - {"binaries/linux64/BeamBody.so"}) or bool(fmi3 - {FMI3_ALWAYS})
+
+
+def fmi3_required(request) -> set[str]:
+    """The FMI 3.0 archive's binaries this build must hold."""
+    return set(FMI3_LAYOUT) if all_platforms_built(request) else {FMI3_ALWAYS}
+
+
 _CACHE: dict = {}
 
 
 def load(request, archive: str, member: str):
-    """(label, bytes, parsed) of the member; a missing member or a FormatError fails the test."""
+    """(label, bytes, parsed) of the member; a missing member or a FormatError fails the test (an FMI 3.0
+    cross-built binary after a host-only build skips)."""
     path = archive_path(request, archive)
     key = (str(path), member)
     if key not in _CACHE:
         with zipfile.ZipFile(path) as z:
             if member not in z.namelist():
+                if archive == "fmu3" and member not in fmi3_required(request):
+                    pytest.skip(f"{path.name} has no {member}: a host-only build (`cargo xtask fmu`); "
+                                "`cargo xtask fmu --all-platforms` builds it")
                 pytest.fail(f"{path} has no {member}", pytrace=False)
             data = z.read(member)
         try:
@@ -251,12 +415,13 @@ def test_binaries_layout(request, archive, fmu_report):
     with zipfile.ZipFile(path) as z:
         present = {n: z.read(n) for n in z.namelist() if n.startswith("binaries/") and not n.endswith("/")}
     fmu_report.note("binaries", f"{archive} {path.name}: {', '.join(sorted(present))}")
-    missing = sorted(set(layout) - set(present))
+    required = fmi3_required(request) if archive == "fmu3" else set(layout)
+    missing = sorted(required - set(present))
     extra = sorted(set(present) - set(layout))
     problems = []
     if missing:
         problems.append(f"missing: {missing}")
-    if archive == "fmu":
+    if archive in ("fmu", "fmu3"):
         if extra:
             problems.append(f"unexpected: {extra}")
     elif extra:  # must be copies of the main FMU's, which the checks below cover
@@ -304,10 +469,10 @@ def test_format_and_machine(request, archive, member, fmu_report):
 
 
 @pytest.mark.parametrize("archive,member", _cases())
-def test_exports_are_exactly_the_fmi2_functions(request, archive, member):
+def test_exports_are_exactly_the_fmi2_and_fmi3_functions(request, archive, member):
     label, _, parsed = load(request, archive, member)
     prefix = "_" if parsed.format == "macho" else ""
-    want = {prefix + f for f in FMI2_FUNCTIONS}
+    want = {prefix + f for f in EXPORTED_FUNCTIONS}
     problems = []
     for unit, exports, _, _ in units(parsed):
         got = set(exports)
@@ -317,7 +482,31 @@ def test_exports_are_exactly_the_fmi2_functions(request, archive, member):
             )
     if parsed.format == "pe" and parsed.unnamed_exports:
         problems.append(f"{parsed.unnamed_exports} export(s) by ordinal only")
-    assert not problems, f"{label}: the exports are not exactly the 44 FMI 2.0 functions:\n  " + "\n  ".join(problems)
+    assert not problems, (
+        f"{label}: the exports are not exactly the 44 FMI 2.0 and 75 FMI 3.0 functions:\n  " + "\n  ".join(problems)
+    )
+
+
+@pytest.mark.parametrize("member", list(FMI3_LAYOUT), ids=[m.removeprefix("binaries/") for m in FMI3_LAYOUT])
+def test_fmi3_binaries_are_the_fmi2_libraries(request, member, fmu_report):
+    """Each binary of the FMI 3.0 archive is byte for byte the FMI 2.0 archive's library for the same
+    platform (x86_64-darwin: the x86_64 slice of darwin64's universal dylib), so that one build serves
+    both versions and the FMI 2.0 archive's checks cover it too."""
+    label, data, _ = load(request, "fmu3", member)
+    source, arch = FMI3_SAME_AS[member]
+    main = request.getfixturevalue("fmu_file")
+    with zipfile.ZipFile(main) as z:
+        if source not in z.namelist():
+            pytest.fail(f"the FMI 3.0 archive holds {member}, the FMI 2.0 archive {main.name} no {source}: "
+                        "the two come from different builds", pytrace=False)
+        other = z.read(source)
+    if arch is not None:
+        fat = binfmt.parse(other)
+        s = fat.slice(arch)
+        other = other[s.offset:s.offset + s.size]
+    what = source.removeprefix("binaries/") + (f" [{arch}]" if arch else "")
+    fmu_report.note("binaries", f"{label} = {what}: {data == other}")
+    assert data == other, f"{label} ({len(data)} bytes) differs from the FMI 2.0 archive's {what} ({len(other)} bytes)"
 
 
 @pytest.mark.parametrize("archive,member", _cases())

@@ -21,9 +21,19 @@ The library computes sin, cos, exp, pow, ... with its own libm (src/math.rs): no
 platform's C library enters the numbers, so nothing is compared with a tolerance. A difference is
 reported with the first point (and quantity) where it appears.
 
-The libraries come from the FMU ($BEAM_BODY_FMU); all of them must be built from the same source.
-A missing cross compiler, emulator, or binary in the FMU fails the test when $CI is set and skips
-it otherwise. Times (wine prefix creation, each run) go to target/fmu-report.txt.
+FMI 3.0: the same host with --fmi3 on the FMI 3.0 archive ($BEAM_BODY_FMU_FMI3) loads
+binaries/x86_64-windows/BeamBody.dll under wine and binaries/aarch64-linux/BeamBody.so under qemu, and
+runs checks 1-4 through FMI 3.0 (FMI3_CYCLES cycles and FMI3_THREADS threads: fewer than FMI 2.0's, the
+same C code), the intermediate-update callback (check 5: the count of the FMU's rule, 1600, and v1 within
+1e-5 m of the law's run) and the misuse refusals (check 6). Then, bit for bit, its scene and its Model
+Exchange trajectory on each emulated platform equal the native FMI 2.0 runs' (test_c_host.py compares
+the native FMI 3.0 run with them). Check 5 sets phi with the platform's own sin, so its v1 is only
+reported against the native --fmi3 run's (measured: identical on both). Times: 2.7 s under wine (its
+start-up), 1.0 s under qemu.
+
+The libraries come from the FMUs ($BEAM_BODY_FMU, $BEAM_BODY_FMU_FMI3); all of them must be built
+from the same source. A missing cross compiler, emulator, or binary in the FMU fails the test when
+$CI is set and skips it otherwise. Times (wine prefix creation, each run) go to target/fmu-report.txt.
 """
 
 from __future__ import annotations
@@ -38,11 +48,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from c_host_util import (CYCLES, H, N_STEPS, STATES, THREADS, compile_host, host_failure, parse_summary,
-                         read_trajectory, run_host)
+from c_host_util import (CYCLES, N_STEPS, THREADS, compile_host, first_difference, fmi3_summary_problems,
+                         host_failure, parse_summary, read_trajectory, run_host)
 from fmu_util import missing_tool
 
 K_SAVE = 50  # t = 0.5 s: mid-turn, the integrator's history full, the law still varying
+# host --fmi3 on the emulated platforms: fewer cycles and threads than FMI 2.0's runs (the same C code
+# runs them; every kind of cycle is still made) to keep the added time small.
+FMI3_CYCLES = 100
+FMI3_THREADS = 4
 
 # Measured on this machine (2 shared cores, other jobs running): native scene 0.02 s (process
 # included); wine prefix creation 19-28 s; full checks 3 s under wine (mostly wine's start-up) and
@@ -89,6 +103,20 @@ def library(fmu_unzipdir: Path, platform: str) -> Path:
     lib = fmu_unzipdir / "binaries" / platform / f"BeamBody.{ext}"
     if not lib.is_file():
         missing_tool(f"the FMU has no {lib.relative_to(fmu_unzipdir)} (build it with the cross binaries)")
+    return lib
+
+
+#: The FMI 3.0 archive's folder (platform tuple) of each platform here.
+FMI3_TUPLES = {"linux64": "x86_64-linux", "win64": "x86_64-windows", "aarch64-linux": "aarch64-linux"}
+
+
+def library3(fmu3_unzipdir: Path, platform: str) -> Path:
+    """The FMI 3.0 archive's library for `platform` (FMI 2.0's name): missing fails on CI, else skips."""
+    ext = {"win64": "dll"}.get(platform, "so")
+    lib = fmu3_unzipdir / "binaries" / FMI3_TUPLES[platform] / f"BeamBody.{ext}"
+    if not lib.is_file():
+        missing_tool(f"the FMI 3.0 FMU has no {lib.relative_to(fmu3_unzipdir)} "
+                     "(build it with `cargo xtask fmu --all-platforms`)")
     return lib
 
 
@@ -221,6 +249,17 @@ class Runs:
             return Run(proc, seconds, traj, state)
         return self._once(("main", name), make)
 
+    def fmi3(self, request, name: str, fmu3_unzipdir: Path) -> Run:
+        """host --fmi3 on the FMI 3.0 archive's library for `name`: checks 1-6 (FMI3_CYCLES cycles and
+        FMI3_THREADS threads), the scene's and Model Exchange's trajectories written."""
+        def make():
+            library3(fmu3_unzipdir, name)
+            p, traj = get_platform(request, name), self.tmp / f"{name}-fmi3.csv"
+            proc, seconds = p.run(fmu3_unzipdir, "--fmi3", "--cycles", FMI3_CYCLES, "--threads", FMI3_THREADS,
+                                  "-o", traj, "--me-out", me_trajectory(traj))
+            return Run(proc, seconds, traj)
+        return self._once(("fmi3", name), make)
+
     def resume(self, request, src: str, dst: str) -> Run:
         """The state saved on `src`, restored on `dst`, the scene continued to its end."""
         def make():
@@ -239,26 +278,6 @@ def runs(tmp_path_factory, fmu_unzipdir) -> Runs:
 def me_trajectory(traj: Path) -> Path:
     """Where a main run writes its Model Exchange trajectory (host.c's check 4, --me-out)."""
     return traj.with_name(traj.stem + "-me.csv")
-
-
-def first_difference(a: dict, b: dict, offset: int = 0) -> str | None:
-    """Where two trajectories (read_trajectory) first differ bitwise: the point, each quantity's
-    values there, and how many points differ in all; None if identical."""
-    n = len(a["t"])
-    assert len(b["t"]) == n, (len(a["t"]), len(b["t"]))
-    diff = np.zeros(n, dtype=bool)
-    for q in STATES:
-        diff |= a[f"{q}_bits"] != b[f"{q}_bits"]
-    if not diff.any():
-        return None
-    k = int(np.flatnonzero(diff)[0])
-    parts = []
-    for q in STATES:
-        x, y = float(a[q][k]), float(b[q][k])
-        ulps = abs(int(a[f"{q}_bits"][k].astype(np.int64)) - int(b[f"{q}_bits"][k].astype(np.int64)))
-        parts.append(f"{q} {x!r} vs {y!r} ({ulps} ulp, {abs(x - y):.3e})")
-    return (f"{int(diff.sum())} of {n} points differ, the first at step {k + offset} "
-            f"(t = {(k + offset) * H:g}): " + "; ".join(parts))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -377,3 +396,48 @@ def test_cross_restore(request, runs, src, dst, fmu_report):
     fmu_report.figure(f"c_host resume {src} -> {dst}", "continuation_identical", int(where is None),
                       f"{run.seconds:.1f} s, steps {K_SAVE}..{N_STEPS}" + (f": {where}" if where else ""))
     assert where is None, f"{src} state resumed on {dst}: {where}"
+
+
+# --------------------------------------------------------------------------------------------------
+# FMI 3.0: the FMI 3.0 archive's libraries under the same host (--fmi3)
+# --------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", EMULATED)
+def test_fmi3_host_passes_emulated(request, runs, fmu3_unzipdir, name, fmu_report):
+    """host --fmi3 under wine (binaries/x86_64-windows/BeamBody.dll) or qemu
+    (binaries/aarch64-linux/BeamBody.so): checks 1-4 through FMI 3.0, the intermediate-update callback
+    (the rule's count, v1 near the law's with this platform's sin) and the refusals of misuse."""
+    run = runs.fmi3(request, name, fmu3_unzipdir).require(f"the FMI 3.0 host on {name}")
+    s = parse_summary(run.proc.stdout)
+    problems = fmi3_summary_problems(s, FMI3_CYCLES, FMI3_THREADS)
+    tag = f"c_host fmi3 {name}"
+    how = "wine64" if name == "win64" else "qemu-aarch64"
+    fmu_report.figure(tag, "wall_seconds", run.seconds,
+                      f"under {how}: checks 1-6, {FMI3_CYCLES} cycles, {FMI3_THREADS} threads")
+    fmu_report.figure(tag, "intermediate_max_dv1", float(s["intermediate"]["max_dv1"]),
+                      f"{s['intermediate']['callbacks']} callbacks, the host's sin")
+    assert not problems, "\n".join(problems) + "\n" + run.proc.stdout[-3000:]
+
+
+@pytest.mark.parametrize("name", EMULATED)
+def test_fmi3_trajectories_bit_identical(request, runs, fmu3_unzipdir, name, fmu_report):
+    """The FMI 3.0 scene and Model Exchange on `name` against the native FMI 2.0 runs, bit for bit: one
+    core under both APIs, the same numbers on every platform. Check 5's final v1 against the native
+    --fmi3 run's is reported (phi comes from each platform's sin there)."""
+    ref = read_trajectory(runs.reference(request).require("the native reference run").traj)
+    ref_me = read_trajectory(me_trajectory(runs.main(request, "linux64").require("the native run").traj))
+    run = runs.fmi3(request, name, fmu3_unzipdir).require(f"the FMI 3.0 host on {name}")
+    where = first_difference(read_trajectory(run.traj), ref)
+    where_me = first_difference(read_trajectory(me_trajectory(run.traj)), ref_me)
+    tag = f"c_host fmi3 {name} vs fmi2 linux64"
+    fmu_report.figure(tag, "trajectory_identical", int(where is None),
+                      f"v1, theta1, u2 at {N_STEPS + 1} points, bit for bit" + (f": {where}" if where else ""))
+    fmu_report.figure(tag, "model_exchange_identical", int(where_me is None),
+                      f"RK4 on Model Exchange, {N_STEPS + 1} points" + (f": {where_me}" if where_me else ""))
+    native = runs.fmi3(request, "linux64", fmu3_unzipdir).require("the native FMI 3.0 host")
+    v1 = {r: float(parse_summary(x.proc.stdout)["intermediate_final"]["v1"]) for r, x in (("native", native), (name, run))}
+    fmu_report.figure(f"c_host fmi3 {name} vs linux64", "intermediate_final_dv1", abs(v1[name] - v1["native"]),
+                      "check 5's v1 at 1.7 s: phi from each platform's sin")
+    assert where is None, f"FMI 3.0 scene on {name} vs FMI 2.0 on linux64: {where}"
+    assert where_me is None, f"FMI 3.0 Model Exchange on {name} vs FMI 2.0 on linux64: {where_me}"
