@@ -58,7 +58,7 @@ TARGET_OVERHEAD_NS = 120.0
 #: The co-simulation FMU at H = 10 ms against the host's CVODE on its Model Exchange (issue 29).
 TARGET_CS_OVER_ME = 2.0
 KNOWN_SOLVERS = ("bdf", "bdf-fixed", "cvode", "ida", "diffsol", "scipy-bdf", "scipy-radau",
-                 "scipy-lsoda", "fmu", "cvode-me", "fmpy-me")
+                 "scipy-lsoda", "fmu", "fmu3", "cvode-me", "fmpy-me")
 WP_HEADER = ("solver,scene,rtol,error,max_error,time_s,time_min_s,steps,rejected,rhs_evals,"
              "jac_evals,lu_factorizations").split(",")
 COUNTERS = ("steps", "rejected", "rhs_evals", "jac_evals", "lu_factorizations", "newton_iters")
@@ -136,7 +136,7 @@ class Case:
     def label(self):
         if self.h is None:
             return self.solver
-        sym = "H" if self.solver == "fmu" else "h"
+        sym = "H" if self.solver in ("fmu", "fmu3") else "h"
         return f"{self.solver}({sym}={fmt_step(self.h)})"
 
     @property
@@ -607,7 +607,7 @@ def markdown(cases, curves, scenes, costs, ref_texts, notes, args, date, cores):
                 L.append(f"| {c.label} | {c.error:.2e} | {fmt_time(c.time)} | {est_text(o)} | {rt} |")
             L.append("")
         # (b3b) co-simulation against a host's integrator on the Model Exchange of the same FMU
-        cs = [c for cv in sc.values() if cv.solver == "fmu" for c in cv.cases if c.h == 1e-2]
+        cs = [c for cv in sc.values() if cv.solver in ("fmu", "fmu3") for c in cv.cases if c.h == 1e-2]
         hosts = [(lab, sc[lab]) for lab in ("cvode-me", "fmpy-me") if lab in sc]
         if cs and hosts:
             L.append(f"Co-simulation at H = 10 ms against a host's integrator on the FMU's Model Exchange, "

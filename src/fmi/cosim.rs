@@ -200,6 +200,7 @@ impl<M: CoSimulation> Instance<M> {
         let f = self.func("DoStep");
         let r = self.cs_allowed(f, mask::STEP_COMPLETE).map(|()| {
             self.core.state = State::IntermediateUpdate;
+            self.intermediate_set = false;
             let t = self.core.time;
             trace!(self, "{f}: intermediate update at t = {t:?}");
             Status::Ok
@@ -207,11 +208,15 @@ impl<M: CoSimulation> Instance<M> {
         self.status(r)
     }
 
-    /// Back to step mode after the host's intermediate-update callback.
+    /// Back to step mode after the host's intermediate-update callback; without an input set
+    /// there, the model goes on from the samples it holds.
     pub fn leave_intermediate_update(&mut self) -> Status {
         let f = self.func("DoStep");
         let r = self.cs_allowed(f, mask::INTERMEDIATE_UPDATE).map(|()| {
             self.core.state = State::StepComplete;
+            if !self.intermediate_set {
+                self.core.model.hold_input();
+            }
             Status::Ok
         });
         self.status(r)

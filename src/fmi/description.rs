@@ -44,8 +44,8 @@ pub struct ExchangeCapabilities {
 /// tested.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fmi3Capabilities {
-    /// fmi3DoStep calls the host's intermediate-update callback at the integrator's steps, and
-    /// the host may set the inputs listed as intermediate then.
+    /// fmi3DoStep calls the host's intermediate-update callback inside the step (every
+    /// `intermediate_step`), and the host may set the inputs listed as intermediate then.
     pub provides_intermediate_update: bool,
     pub has_event_mode: bool,
     pub can_return_early_after_intermediate_update: bool,

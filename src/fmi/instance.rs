@@ -88,6 +88,8 @@ pub struct Instance<M> {
     pub(crate) core: Snapshot<M>,
     /// The host's intermediate-update callback, when it asked to set an intermediate input.
     intermediate_update: Option<IntermediateUpdate>,
+    /// In intermediate update mode: whether the host set an input there.
+    pub(crate) intermediate_set: bool,
 }
 
 impl<M: fmt::Debug> fmt::Debug for Instance<M> {
@@ -152,6 +154,7 @@ impl<M: Model> Instance<M> {
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
             core: Snapshot::new(interface),
             intermediate_update: None,
+            intermediate_set: false,
         };
         inst.trace(format_args!("{func}: instance `{name}`"));
         Some(inst)
@@ -611,6 +614,7 @@ impl<M: Model> Instance<M> {
         let mut notes = Notes::new();
         let set = self.core.model.set(vr, convert(value), state, &mut notes);
         set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
+        self.intermediate_set |= state == State::IntermediateUpdate;
         trace!(self, "{f}: {}", listing::<M, T>(&[vr], &[value]));
         Ok(self.notes(f, notes))
     }
@@ -645,6 +649,7 @@ impl<M: Model> Instance<M> {
             let set = self.core.model.set(*vr, convert(*value), state, &mut notes);
             set.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
         }
+        self.intermediate_set |= state == State::IntermediateUpdate && !vrs.is_empty();
         trace!(self, "{f}: {}", listing::<M, T>(vrs, values));
         Ok(self.notes(f, notes))
     }

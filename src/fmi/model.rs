@@ -157,6 +157,9 @@ pub trait CoSimulation: Model {
     ) -> Result<Option<f64>, String>;
     /// The outputs that have derivatives of order `order`, for messages.
     fn outputs_with_derivatives(order: i32) -> &'static str;
+    /// The host's intermediate-update callback set no intermediate input: the next step goes
+    /// on from the inputs' samples held (the held value is not a new sample).
+    fn hold_input(&mut self);
     /// The spacing at which the model wants the host's inputs inside a communication step
     /// (FMI 3.0's intermediate update): `None` when it takes no input between communication
     /// points.

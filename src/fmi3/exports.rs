@@ -1001,9 +1001,10 @@ impl StepOuts<'_> {
 /// `instance` is an instance; the four out-arguments point to their types.
 ///
 /// With the host's intermediate-update callback (given at instantiation, with `phi` among
-/// the required intermediate variables) and φ from the host, the step is cut at the
-/// integrator's own steps: between the parts the instance is in intermediate update mode
-/// and the host's callback may set φ at that time. The callback runs with no borrow of the
+/// the required intermediate variables) and φ from the host, the step is cut into parts of
+/// `intermediate_step`: between the parts the instance is in intermediate update mode and
+/// the host's callback may set φ at that time (if it sets nothing, the FMU extends the
+/// samples it holds). The callback runs with no borrow of the
 /// instance alive, since the host calls back into it.
 #[no_mangle]
 pub unsafe extern "C" fn fmi3DoStep(
@@ -1071,8 +1072,8 @@ pub unsafe extern "C" fn fmi3DoStep(
     if planned > fmi3Warning {
         return planned;
     }
-    // Part by part: the model's own internal steps, the host's callback after each but the
-    // last.
+    // Part by part (the model's intermediate spacing), the host's callback after each but
+    // the last.
     let mut worst = planned;
     loop {
         let (mut reached, mut t) = (true, f64::NAN);

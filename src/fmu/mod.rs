@@ -54,6 +54,9 @@ pub struct BeamBodyFmu {
     /// left the range of validity (`range_check = stop`): the next DoStep that reaches its end
     /// fails there ([`Run::range_violation`] says why).
     exit_ahead: bool,
+    /// The host's intermediate-update callback set no φ: the next step extends the samples
+    /// held. Set and used within one fmi3DoStep, so not part of the FMU state.
+    hold: bool,
     /// The equations a host integrates (Model Exchange), from ExitInitializationMode on, or
     /// built in initialization mode for the start state.
     pub exchange: Option<Box<exchange::Exchange>>,
@@ -301,6 +304,7 @@ impl fmi::Model for BeamBodyFmu {
             at: 0.0,
             stop: f64::INFINITY,
             exit_ahead: false,
+            hold: false,
             exchange: None,
             cache: Cache::default(),
             phi: PhiNotes::default(),
@@ -463,7 +467,11 @@ impl fmi::CoSimulation for BeamBodyFmu {
         let stepped = if ahead {
             run.step_past(to, stop)
         } else {
-            run.set_sample(sample);
+            if std::mem::take(&mut self.hold) {
+                run.hold_sample();
+            } else {
+                run.set_sample(sample);
+            }
             run.step_to(to)
         };
         match stepped {
@@ -515,6 +523,10 @@ impl fmi::CoSimulation for BeamBodyFmu {
     /// of values only joins the pieces of φ with a jump of φ″ that may restart the
     /// integrator, whose next step is then small, so that the samples would crowd and their
     /// divided differences lose φ″ to round-off (measured: the error of v1 grew 200-fold).
+    fn hold_input(&mut self) {
+        self.hold = true;
+    }
+
     fn intermediate_spacing(&self) -> Option<f64> {
         let s = &self.values.settings;
         let dt = s.intermediate_step;

@@ -231,6 +231,24 @@ impl HostSignal {
         }
     }
 
+    /// The piece for the step [now, now + h] without a new sample (a host that was asked for
+    /// its input inside a step and set none, FMI 3.0's intermediate update): from φ, φ′ of the
+    /// piece in use (`current`) to the extrapolation of the samples held to now + h, a C¹
+    /// join. Holding the last value as a sample at `now` instead would make a staircase of the
+    /// signal, whose slopes the next samples would then see.
+    pub fn extend(&self, current: Phi, now: f64, h: f64) -> Result<Poly, SignalError> {
+        if self.len == 0 {
+            return Err(SignalError::NoSample);
+        }
+        let ahead = now + h - self.history[0].t;
+        if !(h.is_finite() && h > 0.0 && ahead > 0.0) {
+            return Err(SignalError::NotFinite);
+        }
+        let derivatives = self.history[0].sent_derivatives();
+        let target = self.extrapolate(ahead, derivatives).ok_or(SignalError::NotFinite)?.0;
+        finite(Poly::hermite_c1(now, h, current, target))
+    }
+
     fn plan_taylor(&mut self, s: Sample, current: Phi, h: f64) -> Result<Poly, SignalError> {
         self.push(s);
         if s.sent_derivatives() {

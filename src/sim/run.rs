@@ -42,6 +42,10 @@ pub struct Run {
     piece: PhiPiece,
     /// The host's sample at the current time, for the next step.
     sample: Option<Sample>,
+    /// The next interval goes on from the samples held, with no new one
+    /// ([`hold_sample`](Self::hold_sample)). Not part of the run's state: it is set and used
+    /// within one call of the host.
+    extend: bool,
     /// What to do when the state leaves the range of validity, as set, and now: `Warn`
     /// becomes `Off` once it has warned.
     range_set: RangeCheck,
@@ -203,6 +207,7 @@ impl Run {
             input,
             piece,
             sample: None,
+            extend: false,
             range_set: RangeCheck::Stop,
             range: RangeCheck::Stop,
             warning: None,
@@ -376,9 +381,27 @@ impl Run {
         })
     }
 
+    /// The host gave no sample at the current time though asked for one (FMI 3.0's
+    /// intermediate update): the next interval's piece of φ extends the samples held
+    /// ([`HostSignal::extend`]).
+    pub fn hold_sample(&mut self) {
+        self.sample = None;
+        self.extend = true;
+    }
+
     /// Chooses the piece for the interval to `t` from a pending sample.
     fn begin(&mut self, t: f64) -> Result<(), SimError> {
         let now = self.t();
+        if std::mem::take(&mut self.extend) {
+            if let PhiInput::Host(signal) = &self.input {
+                let current = self.piece.eval(now);
+                let poly = signal.extend(current, now, t - now).map_err(|e| {
+                    SimError::Setting(format!("{e} (extended from t = {now} to {t})"))
+                })?;
+                self.switch_piece(PhiPiece::Poly(poly), current)?;
+            }
+            return Ok(());
+        }
         let (PhiInput::Host(signal), Some(sample)) = (&mut self.input, self.sample.take()) else {
             return Ok(());
         };

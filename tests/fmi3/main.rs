@@ -698,3 +698,25 @@ fn fmu_states_continue_bit_for_bit() {
     let st = unsafe { fmi3SetFMUState(me.c, r) };
     me.expect_error(st, &["fmi3SetFMUState", "co-simulation"]);
 }
+
+/// A host that lists `phi` but sets nothing in its callback (FMI 3.0: it *may* set): the
+/// FMU goes on from the samples it holds, extrapolated, so the run is what values at the
+/// communication points give (a held value taken as a sample would make a staircase of φ,
+/// and at 8.5 ms the run left the range of validity at t = 0.30 s).
+#[test]
+fn a_callback_that_sets_nothing_extends_the_samples_held() {
+    let h = 0.0085;
+    let n = 120; // to 1.02 s
+    let law = Host::cs("law");
+    law.ok(law.set_enum(Var::PhiSource, 2));
+    law.initialize();
+    law.steps(0.0, h, n);
+    let reference = law.get_reals(&MOTION).1;
+    let values = run_input(&input_host("values", &[], false), h);
+    let silent = input_host("silent", &[vr(Var::Phi)], true);
+    let y = run_input(&silent, h);
+    assert_eq!(silent.env.times.borrow().len(), n * 8, "8 parts of 1 ms and one of 0.5 ms");
+    let (e_values, e_silent) = ((values[0] - reference[0]).abs(), (y[0] - reference[0]).abs());
+    eprintln!("v1 error: values only {e_values:e}, callback setting nothing {e_silent:e}");
+    assert!(e_silent < 2.0 * e_values + 1e-6, "{e_silent:e} against {e_values:e}");
+}

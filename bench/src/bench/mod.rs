@@ -53,7 +53,7 @@ use crate::{cargo, project_root, python, relative, run_cmd, target_dir, write_te
 use problem::{state_names, Counters, Outcome, Problem, SCENES};
 
 /// The solvers that `bench-run` runs in-process.
-const RUST_SOLVERS: [&str; 6] = ["bdf", "bdf-fixed", "fmu", "cvode", "cvode-me", "diffsol"];
+const RUST_SOLVERS: [&str; 7] = ["bdf", "bdf-fixed", "fmu", "fmu3", "cvode", "cvode-me", "diffsol"];
 /// The solvers of `bench/python/bench_scipy.py`.
 const SCIPY_SOLVERS: [&str; 3] = ["scipy-bdf", "scipy-radau", "scipy-lsoda"];
 /// FMPy's CVode on the FMU's Model Exchange, which `bench_scipy.py` runs too (paper only).
@@ -209,6 +209,7 @@ fn cases(mode: Mode) -> Vec<Case> {
         }
         if scene == "paper" {
             list.extend(fmu.iter().map(|(rtol, h)| Case::new("fmu", scene, rtol, h)));
+            list.extend(fmu.iter().map(|(rtol, h)| Case::new("fmu3", scene, rtol, h)));
             list.extend(tight.iter().map(|rtol| Case::new("cvode-me", scene, rtol, "")));
             list.extend(scipy.iter().map(|rtol| Case::new(FMPY_ME, scene, rtol, "")));
         }
@@ -476,6 +477,7 @@ pub fn run_round(round: u64) -> Result {
     } else {
         None
     };
+    let fmu3 = cases.iter().any(|c| c.solver == "fmu3").then(|| fmu::load3(&fmu::extracted_dir3()));
 
     let warm_up = round == 0;
     // CVODE's library is loaded at its first use: here, before the timed solves.
@@ -508,9 +510,9 @@ pub fn run_round(round: u64) -> Result {
                 if !warm_up {
                     // The same solve once untimed first, in this process: the timed one finds
                     // its code, data and allocator warm, as the next of many solves would.
-                    drop(timed_solve(case, problem, fmu.as_ref()));
+                    drop(timed_solve(case, problem, (fmu.as_ref(), fmu3.as_ref())));
                 }
-                timed_solve(case, problem, fmu.as_ref())
+                timed_solve(case, problem, (fmu.as_ref(), fmu3.as_ref()))
             }
             Err(err) => (Duration::ZERO, Err(err.clone())),
         };
@@ -550,11 +552,17 @@ pub fn run_round(round: u64) -> Result {
     Ok(())
 }
 
+/// The loaded FMUs, FMI 2.0 and 3.0, each if a case needs it.
+type Loaded<'a> = (
+    Option<&'a std::result::Result<crate::import::Fmu2, String>>,
+    Option<&'a std::result::Result<crate::import::Fmu3, String>>,
+);
+
 /// Runs one case, timing the solve alone (the case's numbers are parsed before).
 fn timed_solve(
     case: &Case,
     problem: &Problem,
-    fmu: Option<&std::result::Result<crate::import::Fmu2, String>>,
+    (fmu, fmu3): Loaded,
 ) -> (Duration, std::result::Result<Outcome, String>) {
     let number = |name: &str, text: &str| -> std::result::Result<f64, String> {
         text.parse::<f64>()
@@ -574,6 +582,13 @@ fn timed_solve(
             }
             Some(Err(err)) => Err(err.clone()),
             None => Err("the FMU was not loaded".into()),
+        },
+        "fmu3" => match fmu3 {
+            Some(Ok(fmu)) => {
+                rtol().and_then(|rtol| h().and_then(|h| fmu::run3(fmu, problem, rtol, h)))
+            }
+            Some(Err(err)) => Err(err.clone()),
+            None => Err("the FMI 3.0 FMU was not loaded".into()),
         },
         "cvode" => rtol().and_then(|rtol| cvode::run(problem, rtol)),
         "cvode-me" => match fmu {
@@ -832,6 +847,7 @@ mod tests {
         let quick = cases(Mode::Quick);
         assert_eq!(quick.iter().filter(|c| c.solver == "bdf").count(), 12);
         assert_eq!(quick.iter().filter(|c| c.solver == "fmu").count(), 2);
+        assert_eq!(quick.iter().filter(|c| c.solver == "fmu3").count(), 2);
         assert_eq!(quick.iter().filter(|c| c.solver == "cvode-me").count(), 3);
         assert_eq!(quick.iter().filter(|c| c.solver == FMPY_ME).count(), 2);
         assert!(quick.iter().filter(|c| c.solver.ends_with("-me")).all(|c| c.scene == "paper"));
