@@ -76,8 +76,8 @@ pub const RANGE_CHECK_TYPE: EnumType = EnumType {
                   (the quadratic beam: |v1| <= l, |theta1| <= pi/2, the dae formulation's drift; \
                   the exact beam: a centreline that crosses itself)",
     items: &[
-        ("stop", "the run ends there with a message (the FMU: fmi2Discard)"),
-        ("warn", "a warning, once (the FMU: fmi2Warning); the run goes on"),
+        ("stop", "the run ends there with a message (the FMU: Discard)"),
+        ("warn", "a warning, once (the FMU: Warning); the run goes on"),
         ("off", "the run goes on; a state that is not a number still ends it"),
     ],
 };

@@ -347,8 +347,9 @@ impl<M: CoSimulation> Instance<M> {
         let f = self.func("GetDirectionalDerivative");
         let r = self.cs_allowed(f, self.masks().get).and_then(|()| {
             Err(FmiError::error(format!(
-                "{f}: not provided in co-simulation (providesDirectionalDerivative = false); \
-                 Model Exchange provides it"
+                "{f}: not provided in co-simulation (providesDirectionalDerivative{} = false); \
+                 Model Exchange provides it",
+                if f.is_fmi3() { "s" } else { "" }
             )))
         });
         self.status(r)

@@ -192,7 +192,7 @@ pub struct VarInfo {
 /// others only when debug logging is on for them.
 pub const LOG_CATEGORIES: &[(&str, &str)] = &[
     ("logStatusWarning", "Warnings"),
-    ("logStatusDiscard", "Steps that ended early (fmi2Discard)"),
+    ("logStatusDiscard", "Steps that ended early (Discard)"),
     ("logStatusError", "Errors: illegal calls, bad arguments, failed steps"),
     ("logStatusFatal", "Fatal errors: a caught panic"),
     ("logCalls", "Every call of the FMI API, with its arguments"),

@@ -40,6 +40,12 @@ impl<M: ModelExchange> Instance<M> {
         if n == size {
             return Ok(());
         }
+        // FMI 3.0's names of the counts.
+        let what = match (what, f.is_fmi3()) {
+            ("nx", true) => "nContinuousStates",
+            ("ni", true) => "nEventIndicators",
+            _ => what,
+        };
         Err(FmiError::error(format!(
             "{f}: {what} = {n} is out of range: the model has {size} (the model description's \
              count)"

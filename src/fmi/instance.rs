@@ -179,6 +179,11 @@ impl<M: Model> Instance<M> {
         self.api
     }
 
+    /// Whether FMI 3.0 made it.
+    pub(crate) fn is_fmi3(&self) -> bool {
+        self.api == "fmi3"
+    }
+
     pub fn state(&self) -> State {
         self.core.state
     }
@@ -277,7 +282,7 @@ impl<M: Model> Instance<M> {
     /// Traces an FMU-state call with the instance's state and time afterwards.
     fn trace_state(&mut self, what: fmt::Arguments<'_>) {
         let (state, t) = (self.core.state, self.core.time);
-        trace!(self, "{what}: state `{}`, t = {t:?}", state.name());
+        trace!(self, "{what}: state `{}`, t = {t:?}", state.name_in(self.is_fmi3()));
     }
 
     /// FreeInstance: traces the call; the caller then drops the instance. Allowed in every
@@ -305,7 +310,7 @@ impl<M: Model> Instance<M> {
         if mask & state.bit() != 0 {
             return Ok(());
         }
-        Err(illegal(func, state))
+        Err(illegal(func, state.name_in(self.is_fmi3())))
     }
 
     /// SetDebugLogging. `categories`: `None` where the host passed NULL or invalid UTF-8.
@@ -452,7 +457,7 @@ impl<M: Model> Instance<M> {
         self.core.terminated = false;
         let state = self.masks().initialized;
         self.core.state = state;
-        trace!(self, "{f}: started at t = {t0:?}, state `{}`", state.name());
+        trace!(self, "{f}: started at t = {t0:?}, state `{}`", state.name_in(f.is_fmi3()));
         Ok(Status::Ok)
     }
 
@@ -691,7 +696,7 @@ impl<M: Model> Instance<M> {
             _ => format!(
                 "it is a fixed parameter, settable only before {} (state is `{}`)",
                 self.func("ExitInitializationMode"),
-                state.name()
+                state.name_in(f.is_fmi3())
             ),
         };
         FmiError::error(format!("{f}: cannot set `{}`: {why}", info.name))
@@ -821,7 +826,8 @@ impl<M: Model> Instance<M> {
                 .map(Box::new)
                 .map_err(|e| FmiError::error(format!("{f}: {e}")))?;
             let n = bytes.len();
-            trace!(self, "{f}: {n} bytes, a snapshot in state `{}`", core.state.name());
+            let state = core.state.name_in(f.is_fmi3());
+            trace!(self, "{f}: {n} bytes, a snapshot in state `{state}`");
             Ok(core)
         });
         self.edge(r)
@@ -837,11 +843,8 @@ fn unwritable(func: Func, e: String) -> FmiError {
 
 #[cold]
 #[inline(never)]
-fn illegal(func: impl fmt::Display, state: State) -> FmiError {
-    FmiError::error(format!(
-        "{func}: illegal call sequence: not allowed in state `{}`",
-        state.name()
-    ))
+fn illegal(func: impl fmt::Display, state: &str) -> FmiError {
+    FmiError::error(format!("{func}: illegal call sequence: not allowed in state `{state}`"))
 }
 
 #[cold]

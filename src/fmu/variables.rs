@@ -390,8 +390,9 @@ pub const VARIABLES: &[Variable] = &[
         "dphi",
         "rad/s",
         "Rate of the hinge angle, with phi_source = input, for Model Exchange, which uses it \
-         with phi at every evaluation; co-simulation ignores it (phi's derivatives come by \
-         fmi2SetRealInputDerivatives there)",
+         with phi at every evaluation; co-simulation ignores it (there phi's derivatives come by \
+         fmi2SetRealInputDerivatives in FMI 2.0, and phi inside a step by intermediate update \
+         in FMI 3.0)",
     ),
     input(
         Var::Ddphi,

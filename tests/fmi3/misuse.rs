@@ -40,8 +40,8 @@ impl St {
         match self {
             CsInstantiated | MeInstantiated => "`instantiated`",
             CsInit | MeInit => "`initialization mode`",
-            StepMode => "`step complete`",
-            StepDiscarded => "`step failed`",
+            StepMode => "`step mode`",
+            StepDiscarded => "`step discarded`",
             CsTerminated | MeTerminated => "`terminated`",
             CsError | MeError => "`error`",
             Event => "`event mode`",
