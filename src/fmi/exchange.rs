@@ -192,7 +192,8 @@ impl<M: ModelExchange> Instance<M> {
     /// an integrator's trial may reach) are refused with fmi2Discard, so that the host
     /// retries with a smaller step (FMI 2.0 §2.1.3).
     pub fn get_derivatives(&mut self, out: &mut [f64]) -> Status {
-        let r = self.exchange("GetDerivatives", mask::DERIVATIVES).and_then(|f| {
+        let allowed = if self.is_fmi3() { mask::EXCHANGE_ARRAYS3 } else { mask::DERIVATIVES };
+        let r = self.exchange("GetDerivatives", allowed).and_then(|f| {
             self.started(f)?;
             Self::check_count(f, "nx", out.len(), self.core.model.state_count())?;
             let t = self.core.time;
@@ -226,7 +227,8 @@ impl<M: ModelExchange> Instance<M> {
 
     /// GetNominalsOfContinuousStates.
     pub fn get_nominals(&mut self, out: &mut [f64]) -> Status {
-        let r = self.exchange("GetNominalsOfContinuousStates", mask::NOMINALS).and_then(|f| {
+        let allowed = if self.is_fmi3() { mask::EXCHANGE_ARRAYS3 } else { mask::NOMINALS };
+        let r = self.exchange("GetNominalsOfContinuousStates", allowed).and_then(|f| {
             Self::check_count(f, "nx", out.len(), self.core.model.state_count())?;
             self.core.model.nominals(out);
             trace!(self, "{f}: {out:?}");

@@ -476,7 +476,9 @@ impl<M: Model> Instance<M> {
     /// Reset: back to `instantiated` with the start values. Debug-logging settings stay.
     pub fn reset(&mut self) -> Status {
         let f = self.func("Reset");
-        let r = self.allowed(f, mask::ANY_BUT_FATAL).map(|()| {
+        // Not inside fmi3DoStep's callback, whose step is half done (FMI 3.0 allows only get
+        // and set there).
+        let r = self.allowed(f, mask::ANY_BUT_FATAL & !mask::INTERMEDIATE_UPDATE).map(|()| {
             self.core = Snapshot::new(self.core.interface);
             trace!(self, "{f}: back to `instantiated` with the start values");
             Status::Ok

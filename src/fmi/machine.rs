@@ -124,6 +124,11 @@ pub(crate) mod mask {
     /// masks).
     pub const COUNTS: u32 =
         bits(&[Instantiated, InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error]);
+    /// FMI 3.0's GetContinuousStateDerivatives and GetNominalsOfContinuousStates: like the
+    /// states and indicators, from initialization mode on (FMI 3.0 §3.2's states;
+    /// Reference-FMUs' masks). FMI 2.0 allows the derivatives from event mode on, and the
+    /// nominals from instantiation.
+    pub const EXCHANGE_ARRAYS3: u32 = STATES_AND_INDICATORS;
     pub const NOMINALS: u32 =
         bits(&[Instantiated, EventMode, ContinuousTimeMode, Terminated, Error]);
 }

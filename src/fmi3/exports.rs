@@ -459,7 +459,7 @@ pub unsafe extern "C" fn fmi3GetBinary(
             instance,
             "fmi3GetBinary",
             valueReferences,
-            nValueReferences,
+            nValueReferences.min(nValues),
             values,
             |i, vr, _| {
                 if !check_scalars(i, "fmi3GetBinary", nValueReferences, nValues) {
@@ -489,7 +489,7 @@ pub unsafe extern "C" fn fmi3SetBinary(
             instance,
             "fmi3SetBinary",
             valueReferences,
-            nValueReferences,
+            nValueReferences.min(nValues),
             values,
             |i, vr, _| {
                 if !check_scalars(i, "fmi3SetBinary", nValueReferences, nValues) {
@@ -778,20 +778,14 @@ pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
         if inst.interface() == Interface::CoSimulation {
             return inst.unsupported("UpdateDiscreteStates", NO_EVENT_MODE);
         }
-        // SAFETY: the pointers are the host's, valid as the FMI function's contract says.
-        let outs = unsafe {
-            (
-                discreteStatesNeedUpdate.as_mut(),
-                terminateSimulation.as_mut(),
-                nominalsOfContinuousStatesChanged.as_mut(),
-                valuesOfContinuousStatesChanged.as_mut(),
-                nextEventTimeDefined.as_mut(),
-                nextEventTime.as_mut(),
-            )
-        };
-        let (Some(need), Some(term), Some(nominals), Some(values), Some(defined), Some(next)) =
-            outs
-        else {
+        let flags = [
+            discreteStatesNeedUpdate,
+            terminateSimulation,
+            nominalsOfContinuousStatesChanged,
+            valuesOfContinuousStatesChanged,
+            nextEventTimeDefined,
+        ];
+        if flags.iter().any(|p| p.is_null()) || nextEventTime.is_null() {
             let names = [
                 ("discreteStatesNeedUpdate", discreteStatesNeedUpdate.is_null()),
                 ("terminateSimulation", terminateSimulation.is_null()),
@@ -802,15 +796,25 @@ pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
             ];
             let arg = names.iter().find(|(_, null)| *null).map_or("?", |(n, _)| n);
             return null_arg(inst, F, arg, 1);
-        };
+        }
         match inst.new_discrete_states() {
             Ok((info, status)) => {
-                *need = flag(info.new_discrete_states_needed);
-                *term = flag(info.terminate_simulation);
-                *nominals = flag(info.nominals_of_continuous_states_changed);
-                *values = flag(info.values_of_continuous_states_changed);
-                *defined = flag(info.next_event_time.is_some());
-                *next = info.next_event_time.unwrap_or(0.0);
+                let values = [
+                    info.new_discrete_states_needed,
+                    info.terminate_simulation,
+                    info.nominals_of_continuous_states_changed,
+                    info.values_of_continuous_states_changed,
+                    info.next_event_time.is_some(),
+                ];
+                // SAFETY: non-NULL, and the host's, valid for writes as the function's contract
+                // says. Written through the raw pointers, one at a time: a host may pass one
+                // address for several flags it ignores.
+                unsafe {
+                    for (p, b) in flags.iter().zip(values) {
+                        p.write(flag(b));
+                    }
+                    nextEventTime.write(info.next_event_time.unwrap_or(0.0));
+                }
                 status
             }
             Err(status) => status,
@@ -836,18 +840,19 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
 ) -> fmi3Status {
     const F: &str = "fmi3CompletedIntegratorStep";
     guard(instance, F, |inst| {
-        // SAFETY: the pointers are the host's, valid as the FMI function's contract says.
-        let (Some(enter), Some(terminate)) =
-            (unsafe { enterEventMode.as_mut() }, unsafe { terminateSimulation.as_mut() })
-        else {
+        if enterEventMode.is_null() || terminateSimulation.is_null() {
             let arg =
                 if enterEventMode.is_null() { "enterEventMode" } else { "terminateSimulation" };
             return null_arg(inst, F, arg, 1);
-        };
+        }
         match inst.completed_integrator_step() {
             Ok((end, status)) => {
-                *enter = flag(end.enter_event_mode);
-                *terminate = flag(end.terminate_simulation);
+                // SAFETY: non-NULL, the host's, valid for writes; written through the raw
+                // pointers, which may be one address.
+                unsafe {
+                    enterEventMode.write(flag(end.enter_event_mode));
+                    terminateSimulation.write(flag(end.terminate_simulation));
+                }
                 status
             }
             Err(status) => status,
@@ -980,20 +985,25 @@ pub unsafe extern "C" fn fmi3GetOutputDerivatives(
 }
 
 /// fmi3DoStep's out-arguments.
-struct StepOuts<'a> {
-    event_handling_needed: &'a mut fmi3Boolean,
-    terminate_simulation: &'a mut fmi3Boolean,
-    early_return: &'a mut fmi3Boolean,
-    last_successful_time: &'a mut fmi3Float64,
+/// Raw pointers, checked non-NULL, never references: a host may pass one address for the
+/// flags it ignores, and may read them in its intermediate-update callback while a step runs.
+struct StepOuts {
+    event_handling_needed: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+    early_return: *mut fmi3Boolean,
+    last_successful_time: *mut fmi3Float64,
 }
 
-impl StepOuts<'_> {
-    fn write(&mut self, inst: &Instance) {
+impl StepOuts {
+    fn write(&self, inst: &Instance) {
         let (terminated, last) = inst.step_end();
-        *self.event_handling_needed = fmi3False;
-        *self.terminate_simulation = flag(terminated);
-        *self.early_return = fmi3False;
-        *self.last_successful_time = last;
+        // SAFETY: non-NULL (checked when made), the host's, valid for writes for the call.
+        unsafe {
+            self.event_handling_needed.write(fmi3False);
+            self.terminate_simulation.write(flag(terminated));
+            self.early_return.write(fmi3False);
+            self.last_successful_time.write(last);
+        }
     }
 }
 
@@ -1019,16 +1029,14 @@ pub unsafe extern "C" fn fmi3DoStep(
 ) -> fmi3Status {
     const F: &str = "fmi3DoStep";
     let (tc, h) = (currentCommunicationPoint, communicationStepSize);
-    // SAFETY: the pointers are the host's, valid as the FMI function's contract says.
-    let outs = unsafe {
-        (
-            eventHandlingNeeded.as_mut(),
-            terminateSimulation.as_mut(),
-            earlyReturn.as_mut(),
-            lastSuccessfulTime.as_mut(),
-        )
+    let outs = StepOuts {
+        event_handling_needed: eventHandlingNeeded,
+        terminate_simulation: terminateSimulation,
+        early_return: earlyReturn,
+        last_successful_time: lastSuccessfulTime,
     };
-    let (Some(e), Some(t), Some(r), Some(l)) = outs else {
+    let flags = [outs.event_handling_needed, outs.terminate_simulation, outs.early_return];
+    if flags.iter().any(|p| p.is_null()) || outs.last_successful_time.is_null() {
         return guard(instance, F, |inst| {
             let names = [
                 ("eventHandlingNeeded", eventHandlingNeeded.is_null()),
@@ -1039,13 +1047,7 @@ pub unsafe extern "C" fn fmi3DoStep(
             let arg = names.iter().find(|(_, null)| *null).map_or("?", |(n, _)| n);
             null_arg(inst, F, arg, 1)
         });
-    };
-    let mut outs = StepOuts {
-        event_handling_needed: e,
-        terminate_simulation: t,
-        early_return: r,
-        last_successful_time: l,
-    };
+    }
     let mut callback = None;
     let status = guard(instance, F, |inst| {
         let status = match inst.intermediate_update() {

@@ -69,10 +69,10 @@ pub fn instantiate(
     Some(inst)
 }
 
-/// The variables a host may name in `requiredIntermediateVariables`: the intermediate
-/// inputs, to set, and the outputs, to get.
+/// The variables a host may name in `requiredIntermediateVariables`: those marked
+/// `intermediateUpdate = "true"` (FMI 3.0 requires it), the intermediate inputs. Values of
+/// any variable can be read in intermediate update mode anyway.
 fn check_required(required: &[u32]) -> Result<(), String> {
-    use crate::fmi::description::Causality;
     for vr in required {
         let Some(v) = VARIABLES.get(*vr as usize) else {
             return Err(format!(
@@ -81,18 +81,11 @@ fn check_required(required: &[u32]) -> Result<(), String> {
                 VARIABLES.len()
             ));
         };
-        let fits = match v.causality {
-            Causality::Output => true,
-            Causality::Input => {
-                <crate::fmu::BeamBodyFmu as crate::fmi::Model>::intermediate_input(*vr)
-            }
-            _ => false,
-        };
-        if !fits {
+        if !<crate::fmu::BeamBodyFmu as crate::fmi::Model>::intermediate_input(*vr) {
             let phi = Var::Phi.info().name;
             return Err(format!(
-                "requiredIntermediateVariables holds `{}` ({vr}), which is neither an output nor \
-                 an input with intermediateUpdate = true (`{phi}`)",
+                "requiredIntermediateVariables holds `{}` ({vr}), which is not marked \
+                 intermediateUpdate = true: only `{phi}` is",
                 v.name
             ));
         }

@@ -341,7 +341,7 @@ fn intermediate_update_hands_phi_inside_the_step() {
         "v1 error with intermediate update {e_intermediate:e}, values only {e_values:e}"
     );
     // Without `phi` among the required variables the callback is never called.
-    let quiet = input_host("not required", &[vr(Var::V1)], true);
+    let quiet = input_host("not required", &[], true);
     quiet.env.phi.set(Some(paper_phi));
     run_input(&quiet, 0.0425);
     assert!(quiet.env.times.borrow().is_empty());
@@ -357,8 +357,9 @@ fn intermediate_update_hands_phi_inside_the_step() {
 /// parameters, a nested step and FMU states are refused.
 #[test]
 fn intermediate_update_mode_allows_only_its_calls() {
-    fn probes() -> [(Probe, fmi3Status); 5] {
+    fn probes() -> [(Probe, fmi3Status); 6] {
         [
+            (|c| unsafe { fmi3Reset(c) }, ERROR),
             (|c| unsafe { fmi3SetFloat64(c, &vr(Var::Dphi), 1, &0.0, 1) }, ERROR),
             (|c| unsafe { fmi3SetFloat64(c, &vr(Var::L), 1, &2.0, 1) }, ERROR),
             (
@@ -398,6 +399,7 @@ fn intermediate_update_mode_allows_only_its_calls() {
         let log = host.take();
         if want == ERROR {
             let needle = [
+                "fmi3Reset: illegal call sequence",
                 "intermediate update mode",
                 "intermediate update mode",
                 "illegal call sequence",
@@ -560,6 +562,11 @@ fn enumerations_are_int64_and_arrays_are_scalars() {
     let mut y = [0.0; 2];
     let s = unsafe { fmi3GetFloat64(h.c, &vr(Var::L), 1, y.as_mut_ptr(), 2) };
     h.expect_error(s, &["fmi3GetFloat64", "nValues = 2 with 1 value references"]);
+    // More value references than values: refused before the values are looked at.
+    let (vrs, mut sizes, mut bins) = ([vr(Var::L); 3], [0usize; 1], [null(); 1]);
+    let s =
+        unsafe { fmi3GetBinary(h.c, vrs.as_ptr(), 3, sizes.as_mut_ptr(), bins.as_mut_ptr(), 1) };
+    h.expect_error(s, &["fmi3GetBinary", "nValues = 1 with 3 value references"]);
     let s = h.set_real(Var::Time, 1.0);
     h.expect_error(s, &["fmi3SetFloat64", "`time`", "independent variable"]);
     let s = h.set_real(Var::L, -1.0);
@@ -621,6 +628,7 @@ fn instantiation_refusals() {
     expect(cs(&token(), 1, &[]), "eventModeUsed = true");
     expect(cs(&token(), 0, &[vr(Var::Dphi)]), "`dphi`");
     expect(cs(&token(), 0, &[9999]), "unknown value reference 9999");
+    expect(cs(&token(), 0, &[vr(Var::V1)]), "`v1`");
     let me = unsafe {
         fmi3InstantiateModelExchange(
             null(),

@@ -197,10 +197,14 @@ fn calls() -> Vec<Call> {
             let x = [0.0; 4];
             unsafe { fmi3SetContinuousStates(h.c, x.as_ptr(), 4) }
         }),
-        ("fmi3GetContinuousStateDerivatives", &[Event, Continuous, MeTerminated, MeError], |h| {
-            let mut x = [0.0; 4];
-            unsafe { fmi3GetContinuousStateDerivatives(h.c, x.as_mut_ptr(), 4) }
-        }),
+        (
+            "fmi3GetContinuousStateDerivatives",
+            &[MeInit, Event, Continuous, MeTerminated, MeError],
+            |h| {
+                let mut x = [0.0; 4];
+                unsafe { fmi3GetContinuousStateDerivatives(h.c, x.as_mut_ptr(), 4) }
+            },
+        ),
         ("fmi3GetEventIndicators", &[MeInit, Event, Continuous, MeTerminated, MeError], |h| {
             let mut z = [0.0; 2];
             unsafe { fmi3GetEventIndicators(h.c, z.as_mut_ptr(), 2) }
@@ -211,7 +215,7 @@ fn calls() -> Vec<Call> {
         }),
         (
             "fmi3GetNominalsOfContinuousStates",
-            &[MeInstantiated, Event, Continuous, MeTerminated, MeError],
+            &[MeInit, Event, Continuous, MeTerminated, MeError],
             |h| {
                 let mut x = [0.0; 4];
                 unsafe { fmi3GetNominalsOfContinuousStates(h.c, x.as_mut_ptr(), 4) }

@@ -285,7 +285,8 @@ def test_intermediate_update_beats_values_only(fmu3_dir, md3, beam_body, fmu_rep
 
 
 def test_callback_rules(fmu3_dir, md3, fmu_report):
-    """No callback when phi is not in requiredIntermediateVariables, when intermediate_step = 0, or when
+    """An output in requiredIntermediateVariables is refused at instantiation (only phi is marked
+    intermediateUpdate). No callback when phi is not in requiredIntermediateVariables, when intermediate_step = 0, or when
     phi comes from the law (phi_source = 2): the run is then the one without a callback, bit for bit.
     intermediate_step = 2.5 ms on h = 8.5 ms: three callbacks a step (at 2.5, 5 and 7.5 ms; the last
     part is 1 ms), at the rule's times. And eventModeUsed = true is refused at
@@ -312,8 +313,11 @@ def test_callback_rules(fmu3_dir, md3, fmu_report):
             s.free()
 
     plain = run("plain")
-    unlisted = run("unlisted", intermediate_update=callback, required=("v1",))
+    unlisted = run("unlisted", intermediate_update=callback, required=())
     assert not calls and np.array_equal(unlisted, plain), f"{len(calls)} callbacks without phi listed"
+    # Only variables marked intermediateUpdate may be listed (FMI 3.0): an output is refused.
+    with pytest.raises(Exception, match="Failed to instantiate FMU"):
+        Slave3(fmu3_dir, md3, name="v1 listed", intermediate_update=callback, required=("v1",))
     never = run("intermediate_step=0", reals={"intermediate_step": 0.0}, intermediate_update=callback,
                 required=("phi",))
     assert not calls and np.array_equal(never, plain), f"{len(calls)} callbacks with intermediate_step = 0"
