@@ -16,7 +16,7 @@ pub const STATUS_TERMINATED: i32 = 3;
 
 /// The most parts one step with intermediate update is cut into (FMI 3.0): the host's
 /// callback runs at most this many times a step.
-pub const MAX_PARTS: f64 = 1_000.0;
+pub const MAX_PARTS: f64 = 100.0;
 
 impl<M: CoSimulation> Instance<M> {
     /// Whether `f`, a co-simulation function, may be called in the current state (`mask`)

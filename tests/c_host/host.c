@@ -2042,11 +2042,11 @@ static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 t,
 
 /* The ends of the parts of a step by h from the FMU's time `from` to `target` = tc + h, but the
  * last's, by the FMU's rule (src/fmi/cosim.rs, step_part): intermediate_step dt (at least
- * h/1000) while more than 1.25 dt remains, then the rest. Their number (the callbacks of the
+ * h/100) while more than 1.25 dt remains, then the rest. Their number (the callbacks of the
  * step); the first `cap` into `ends`. */
 static int iu_rule(double from, double target, double h, double dt, double *ends, int cap) {
     int n = 0;
-    dt = fmax(dt, h / 1000.0);
+    dt = fmax(dt, h / 100.0);
     while (from + 1.25 * dt < target && from + dt > from) {
         from += dt;
         if (n < cap) ends[n] = from;

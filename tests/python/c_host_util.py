@@ -36,7 +36,7 @@ IU_H = 0.0085
 IU_DT = 1e-3
 IU_STEPS = 200
 IU_TOL = 1e-5
-MAX_PARTS = 1e3  # the FMU's bound on the parts of one step (src/fmi/cosim.rs, MAX_PARTS)
+MAX_PARTS = 1e2  # the FMU's bound on the parts of one step (src/fmi/cosim.rs, MAX_PARTS)
 MISUSE_REFUSED = 11
 FMI3_EXPORTS = 75
 
