@@ -172,12 +172,7 @@ fn run_fmu3(dir: &Path) -> Result<Vec<[f64; 4]>> {
     let ex = DEFAULT_EXPERIMENT;
     let points = communication_points(ex.start_time, ex.stop_time, ex.step_size);
     let vrs = RECORDED.map(Var::vr);
-    let law = PHI_SOURCE_TYPE
-        .items
-        .iter()
-        .position(|(name, _)| *name == "law")
-        .ok_or("the PhiSource enumeration has no item `law`")? as i64
-        + 1;
+    let law = i64::from(law_item()?);
     let mut instance = fmu.instantiate(MODEL_IDENTIFIER)?;
     let version = instance.get_version().to_owned();
     if version != "3.0" {
@@ -355,17 +350,18 @@ fn communication_points(start: f64, stop: f64, h: f64) -> Vec<f64> {
     (0..=n).map(|k| if k == n { stop } else { start + k as f64 * h }).collect()
 }
 
+/// The value of `phi_source`'s item `law` (1-based, as the model description numbers it).
+fn law_item() -> Result<i32> {
+    let k = PHI_SOURCE_TYPE.items.iter().position(|(name, _)| *name == "law");
+    Ok(k.ok_or("the PhiSource enumeration has no item `law`")? as i32 + 1)
+}
+
 fn run_fmu(dir: &Path) -> Result<FmuRun> {
     let fmu = Fmu2::load(dir)?;
     let ex = DEFAULT_EXPERIMENT;
     let points = communication_points(ex.start_time, ex.stop_time, ex.step_size);
     let vrs = RECORDED.map(Var::vr);
-    let law = PHI_SOURCE_TYPE
-        .items
-        .iter()
-        .position(|(name, _)| *name == "law")
-        .ok_or("the PhiSource enumeration has no item `law`")? as i32
-        + 1;
+    let law = law_item()?;
 
     let started = Instant::now();
     let mut instance = fmu.instantiate(MODEL_IDENTIFIER, false)?;

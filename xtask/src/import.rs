@@ -48,15 +48,9 @@ impl Fmu2 {
     /// Loads the FMU extracted in `dir`: `modelDescription.xml` and this machine's library,
     /// `binaries/linux64/<modelIdentifier>.so` on Linux x86-64 (rust-fmi picks the folder).
     pub fn load(dir: &Path) -> Result<Fmu2> {
-        let (md, xml, dir, links) = linked(dir)?;
-        let import =
-            Fmi2Import::new(links, &xml).map_err(|err| format!("{}: {err}", relative(&md)))?;
-        let cs = import.model_description().co_simulation.as_ref();
-        let id = cs.ok_or_else(|| format!("{} has no CoSimulation", relative(&md)))?;
-        let so = dir.join(import.shared_lib_path(&id.model_identifier)?);
-        let library = import
-            .binding(&id.model_identifier)
-            .map_err(|err| format!("cannot load {}: {err}", relative(&so)))?;
+        let (import, library) = load::<Fmi2Import>(dir, |import| {
+            import.model_description().co_simulation.as_ref().map(|cs| cs.model_identifier.clone())
+        })?;
         Ok(Fmu2 { import, _library: library })
     }
 
@@ -72,6 +66,18 @@ impl Fmu2 {
         take_messages();
         self.import.instantiate_me(name, false, logging_on).map_err(instantiation_error)
     }
+}
+
+/// The importer of the FMU extracted in `dir` (either version) and its library, loaded from
+/// the folder of this machine; `cs_id` gives the co-simulation's modelIdentifier.
+fn load<I: FmiImport>(dir: &Path, cs_id: impl Fn(&I) -> Option<String>) -> Result<(I, I::Binding)> {
+    let (md, xml, dir, links) = linked(dir)?;
+    let import = I::new(links, &xml).map_err(|err| format!("{}: {err}", relative(&md)))?;
+    let id = cs_id(&import).ok_or_else(|| format!("{} has no CoSimulation", relative(&md)))?;
+    let so = dir.join(import.shared_lib_path(&id)?);
+    let library =
+        import.binding(&id).map_err(|err| format!("cannot load {}: {err}", relative(&so)))?;
+    Ok((import, library))
 }
 
 /// The logger, set once; the extracted FMU in `dir`: its modelDescription's path and text, the
@@ -118,15 +124,9 @@ impl Fmu3 {
     /// Loads the FMU extracted in `dir`, this machine's library from its platform-tuple
     /// folder (`binaries/x86_64-linux/` on Linux x86-64).
     pub fn load(dir: &Path) -> Result<Fmu3> {
-        let (md, xml, dir, links) = linked(dir)?;
-        let import =
-            Fmi3Import::new(links, &xml).map_err(|err| format!("{}: {err}", relative(&md)))?;
-        let cs = import.model_description().co_simulation.as_ref();
-        let id = cs.ok_or_else(|| format!("{} has no CoSimulation", relative(&md)))?;
-        let so = dir.join(import.shared_lib_path(&id.model_identifier)?);
-        let library = import
-            .binding(&id.model_identifier)
-            .map_err(|err| format!("cannot load {}: {err}", relative(&so)))?;
+        let (import, library) = load::<Fmi3Import>(dir, |import| {
+            import.model_description().co_simulation.as_ref().map(|cs| cs.model_identifier.clone())
+        })?;
         Ok(Fmu3 { import, _library: library })
     }
 
