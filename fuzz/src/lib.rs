@@ -125,8 +125,13 @@ pub fn check_outputs(inst: &mut Instance, records: &Records) {
     if !readable(inst.state()) {
         return;
     }
-    let vrs: Vec<u32> =
-        VARIABLES.iter().filter(|v| v.ty.base() == BaseType::Real).map(|v| v.vr()).collect();
+    // The scalars of the instance's model description (FMI 3.0's arrays are read by count).
+    let fmi3 = inst.api() == "fmi3";
+    let vrs: Vec<u32> = VARIABLES
+        .iter()
+        .filter(|v| v.ty.base() == BaseType::Real && v.dims.is_empty() && v.in_version(fmi3))
+        .map(|v| v.vr())
+        .collect();
     let mut out = vec![0.0; vrs.len()];
     let before = records.borrow().len();
     let status = inst.get_real(&vrs, &mut out);

@@ -107,43 +107,46 @@ pub(crate) fn null_arg(inst: &mut Instance, func: &str, arg: &str, n: usize) -> 
     Status::Error
 }
 
-/// The shape of the get functions: `body` gets the value references and the values as
-/// slices of `nvr` elements.
+/// The shape of the get functions: `body` gets the value references (`nvr` of them) and
+/// the values (`nvalues`: FMI 3.0's `nValues`, which counts every element of an array; FMI
+/// 2.0 passes `nvr`) as slices.
 ///
 /// # Safety
-/// `vr` and `value` hold `nvr` elements, as the FMI caller guarantees.
+/// `vr` holds `nvr` elements and `value` `nvalues`, as the FMI caller guarantees.
 pub(crate) unsafe fn get_values<T>(
     c: Handle,
     func: &str,
     vr: *const u32,
     nvr: usize,
     value: *mut T,
+    nvalues: usize,
     body: impl FnOnce(&mut Instance, &[u32], &mut [T]) -> Status,
 ) -> CStatus {
-    // SAFETY: each pointer holds `nvr` elements (the function's contract).
-    guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
+    // SAFETY: each pointer holds its count of elements (the function's contract).
+    guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice_mut(value, nvalues)) } {
         (Some(vr), Some(value)) => body(inst, vr, value),
         (None, _) => null_arg(inst, func, "vr", nvr),
-        (_, None) => null_arg(inst, func, "value", nvr),
+        (_, None) => null_arg(inst, func, "value", nvalues),
     })
 }
 
 /// The shape of the set functions: [`get_values`] with values to read.
 ///
 /// # Safety
-/// `vr` and `value` hold `nvr` elements, as the FMI caller guarantees.
+/// `vr` holds `nvr` elements and `value` `nvalues`, as the FMI caller guarantees.
 pub(crate) unsafe fn set_values<T>(
     c: Handle,
     func: &str,
     vr: *const u32,
     nvr: usize,
     value: *const T,
+    nvalues: usize,
     body: impl FnOnce(&mut Instance, &[u32], &[T]) -> Status,
 ) -> CStatus {
-    // SAFETY: each pointer holds `nvr` elements (the function's contract).
-    guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
+    // SAFETY: each pointer holds its count of elements (the function's contract).
+    guard(c, func, |inst| match unsafe { (slice(vr, nvr), slice(value, nvalues)) } {
         (Some(vr), Some(value)) => body(inst, vr, value),
         (None, _) => null_arg(inst, func, "vr", nvr),
-        (_, None) => null_arg(inst, func, "value", nvr),
+        (_, None) => null_arg(inst, func, "value", nvalues),
     })
 }

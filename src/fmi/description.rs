@@ -186,6 +186,61 @@ pub struct VarInfo {
     /// For the derivative of a continuous state (Model Exchange): the state's value
     /// reference.
     pub derivative_of: Option<u32>,
+    /// FMI 3.0: a structural parameter (`causality = "structuralParameter"`, UInt64), which
+    /// sizes arrays and is set in configuration mode only. FMI 2.0 has it as a parameter.
+    pub structural: bool,
+    /// FMI 3.0: the array's dimensions, outermost first (row-major); empty for a scalar.
+    pub dims: &'static [Dim],
+    /// The model descriptions that hold the variable.
+    pub only: Only,
+}
+
+impl VarInfo {
+    /// The type of the get and set functions that access it in FMI 3.0 (`fmi3`) or FMI 2.0:
+    /// [`Type::base3`], and UInt64 for a structural parameter (FMI 3.0 §2.4.7.4: a
+    /// `<Dimension>` refers to a UInt64).
+    pub fn base_in(&self, fmi3: bool) -> BaseType {
+        match (fmi3, self.structural) {
+            (true, true) => BaseType::UInt64,
+            (true, false) => self.ty.base3(),
+            (false, _) => self.ty.base(),
+        }
+    }
+
+    /// Whether the model description of FMI 3.0 (`fmi3`) or FMI 2.0 holds it.
+    pub fn in_version(&self, fmi3: bool) -> bool {
+        match self.only {
+            Only::Both => true,
+            Only::Fmi2 => !fmi3,
+            Only::Fmi3 => fmi3,
+        }
+    }
+}
+
+/// One dimension of an FMI 3.0 array variable (`<Dimension>`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dim {
+    /// Sized by the structural parameter with this value reference.
+    Param(u32),
+    /// A fixed size.
+    Fixed(u64),
+}
+
+/// Which model descriptions hold a variable: FMI 3.0's arrays are not in FMI 2.0's, and the
+/// scalar state derivatives FMI 2.0 Model Exchange declares are not in FMI 3.0's, whose
+/// states are arrays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Only {
+    Both,
+    Fmi2,
+    Fmi3,
+}
+
+/// The model description a model instance serves, which fixes its variables and states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Version {
+    Fmi2,
+    Fmi3,
 }
 
 /// `<LogCategories>`: (name, description). Warnings and errors are always logged; the

@@ -7,7 +7,7 @@
 //! through the instance's [`Logger`] and returns the status. No `unsafe`, no I/O.
 #![forbid(unsafe_code)]
 
-use super::description::{BaseType, Causality, VarInfo, LOG_CATEGORIES};
+use super::description::{BaseType, Causality, Dim, VarInfo, Version, LOG_CATEGORIES};
 use super::machine::{mask, FmiError, FmiResult, Interface, Masks, State, Status};
 use super::model::{Model, Notes, Setup, Value};
 use super::snapshot::{self, Snapshot};
@@ -48,6 +48,15 @@ impl Func {
     /// Whether the function is FMI 3.0's.
     pub fn is_fmi3(&self) -> bool {
         self.0 == "fmi3"
+    }
+
+    /// The model description its version serves.
+    pub fn version(&self) -> Version {
+        if self.is_fmi3() {
+            Version::Fmi3
+        } else {
+            Version::Fmi2
+        }
     }
 }
 
@@ -152,7 +161,7 @@ impl<M: Model> Instance<M> {
             api,
             log,
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
-            core: Snapshot::new(interface),
+            core: Snapshot::new(interface, Func(api, "").version()),
             intermediate_update: None,
             intermediate_set: false,
         };
@@ -418,6 +427,43 @@ impl<M: Model> Instance<M> {
         self.status(r)
     }
 
+    /// FMI 3.0's EnterConfigurationMode: from `instantiated`, to set the structural
+    /// parameters. The model has no tunable structural parameter, so there is no
+    /// reconfiguration mode (from step or event mode).
+    pub fn enter_configuration_mode(&mut self) -> Status {
+        self.configuration(
+            "EnterConfigurationMode",
+            mask::INSTANTIATED,
+            State::ConfigurationMode,
+            "the structural parameters are fixed: there is no reconfiguration mode, and \
+             configuration mode comes right after instantiation",
+        )
+    }
+
+    /// FMI 3.0's ExitConfigurationMode: back to `instantiated`, where the arrays have the
+    /// sizes just set.
+    pub fn exit_configuration_mode(&mut self) -> Status {
+        self.configuration(
+            "ExitConfigurationMode",
+            mask::CONFIGURATION,
+            State::Instantiated,
+            "it leaves configuration mode",
+        )
+    }
+
+    fn configuration(&mut self, name: &'static str, allowed: u32, to: State, why: &str) -> Status {
+        let f = self.func(name);
+        let r = match self.allowed(f, allowed) {
+            Ok(()) => {
+                self.core.state = to;
+                trace!(self, "{f}: state `{}`", to.name_in(true));
+                Ok(Status::Ok)
+            }
+            Err(e) => Err(FmiError::error(format!("{} ({why})", e.message))),
+        };
+        self.status(r)
+    }
+
     /// EnterInitializationMode of FMI 3.0, which takes the experiment's setup (FMI 2.0's
     /// SetupExperiment).
     pub fn enter_initialization_mode_with(
@@ -479,7 +525,7 @@ impl<M: Model> Instance<M> {
         // Not inside fmi3DoStep's callback, whose step is half done (FMI 3.0 allows only get
         // and set there).
         let r = self.allowed(f, mask::ANY_BUT_FATAL & !mask::INTERMEDIATE_UPDATE).map(|()| {
-            self.core = Snapshot::new(self.core.interface);
+            self.core = Snapshot::new(self.core.interface, self.core.version);
             trace!(self, "{f}: back to `instantiated` with the start values");
             Status::Ok
         });
@@ -507,7 +553,13 @@ impl<M: Model> Instance<M> {
     pub(crate) fn lookup(func: Func, vr: u32, base: BaseType) -> FmiResult<&'static VarInfo> {
         let fmi3 = func.is_fmi3();
         match M::variable(vr) {
-            Some(info) if base == if fmi3 { info.ty.base3() } else { info.ty.base() } => Ok(info),
+            Some(info) if !info.in_version(fmi3) => Err(FmiError::error(format!(
+                "{func}: value reference {vr} (`{}`) is not in this version's model \
+                 description: it is FMI {}'s only",
+                info.name,
+                if fmi3 { "2.0" } else { "3.0" }
+            ))),
+            Some(info) if base == info.base_in(fmi3) => Ok(info),
             found => Err(bad_reference(func, vr, base, found, M::variable_count())),
         }
     }
@@ -536,7 +588,71 @@ impl<M: Model> Instance<M> {
         }
     }
 
-    /// Gets every value of `vrs` of base type `base` into `out`.
+    /// The number of values of `info`: 1 for a scalar, the product of its dimensions for an
+    /// FMI 3.0 array, at the structural parameters' current values.
+    fn len_of(&mut self, info: &VarInfo) -> usize {
+        let setup = self.core.setup;
+        info.dims.iter().fold(1, |n, d| {
+            n * match *d {
+                Dim::Fixed(k) => k as usize,
+                Dim::Param(vr) => match self.core.model.get(vr, &setup) {
+                    Ok(Value::Integer(k)) => k.max(0) as usize,
+                    _ => 0,
+                },
+            }
+        })
+    }
+
+    /// Checks `vrs` against base type `base` and returns how many values each has; Error
+    /// when they do not add up to the host's `n` (`nValues` in FMI 3.0).
+    fn sizes(&mut self, f: Func, base: BaseType, vrs: &[u32], n: usize) -> FmiResult<Vec<usize>> {
+        let mut sizes = Vec::with_capacity(vrs.len());
+        for vr in vrs {
+            let info = Self::lookup(f, *vr, base)?;
+            sizes.push(self.len_of(info));
+        }
+        let total: usize = sizes.iter().sum();
+        if total == n {
+            return Ok(sizes);
+        }
+        let arrays: Vec<String> = vrs
+            .iter()
+            .zip(&sizes)
+            .filter_map(|(vr, k)| {
+                let info = M::variable(*vr)?;
+                (!info.dims.is_empty()).then(|| format!("`{}` has {k}", info.name))
+            })
+            .collect();
+        Err(FmiError::error(if arrays.is_empty() {
+            format!("{f}: {} value references but {n} values", vrs.len())
+        } else {
+            format!(
+                "{f}: nValues = {n}, but the {} value references name {total} values (an array \
+                 counts its elements: {})",
+                vrs.len(),
+                arrays.join(", ")
+            )
+        }))
+    }
+
+    /// The values of array variable `vr` (FMI 3.0) into `out`.
+    fn get_array(&mut self, f: Func, vr: u32, out: &mut [f64]) -> FmiResult<()> {
+        let setup = self.core.setup;
+        self.core.model.get_array(vr, &setup, out).map_err(|msg| {
+            FmiError::error(format!("{f}: the outputs cannot be computed: {msg}"))
+        })?;
+        if let Some(k) = out.iter().position(|x| !x.is_finite()) {
+            let name = M::variable(vr).map_or("?", |v| v.name);
+            return Err(FmiError::error(format!(
+                "{f}: `{name}`[{k}] is not finite at t = {}",
+                self.core.time
+            )));
+        }
+        Ok(())
+    }
+
+    /// Gets every value of `vrs` of base type `base` into `out`: one for each scalar, all
+    /// the elements of each array (FMI 3.0), row-major.
     pub fn get<T: fmt::Debug>(
         &mut self,
         name: &'static str,
@@ -548,15 +664,21 @@ impl<M: Model> Instance<M> {
         let f = self.func(name);
         let r = (|| {
             self.allowed(f, self.masks().get)?;
-            if vrs.len() != out.len() {
-                return Err(FmiError::error(format!(
-                    "{f}: {} value references but {} values",
-                    vrs.len(),
-                    out.len()
-                )));
-            }
-            for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-                *slot = convert(self.get_value(f, *vr, base)?);
+            let sizes = self.sizes(f, base, vrs, out.len())?;
+            let mut k = 0;
+            let mut array = Vec::new();
+            for (vr, n) in vrs.iter().zip(sizes) {
+                let info = Self::lookup(f, *vr, base)?;
+                if info.dims.is_empty() {
+                    out[k] = convert(self.get_value(f, *vr, base)?);
+                } else {
+                    array.resize(n, 0.0);
+                    self.get_array(f, *vr, &mut array)?;
+                    for (slot, x) in out[k..k + n].iter_mut().zip(&array) {
+                        *slot = convert(Value::Real(*x));
+                    }
+                }
+                k += n;
             }
             trace!(self, "{f}: {}", listing::<M, T>(vrs, out));
             Ok(Status::Ok)
@@ -636,17 +758,14 @@ impl<M: Model> Instance<M> {
         convert: impl Fn(T) -> Value,
     ) -> FmiResult {
         self.allowed(f, self.masks().set)?;
-        if vrs.len() != values.len() {
-            return Err(FmiError::error(format!(
-                "{f}: {} value references but {} values",
-                vrs.len(),
-                values.len()
-            )));
-        }
         let state = self.core.state;
-        for (vr, value) in vrs.iter().zip(values) {
+        for vr in vrs {
             let info = Self::lookup(f, *vr, base)?;
             self.settable(f, *vr, info, state)?;
+        }
+        // Arrays are never settable, so each value reference has one value.
+        self.sizes(f, base, vrs, values.len())?;
+        for (vr, value) in vrs.iter().zip(values) {
             // All or none: each value is checked before any is set.
             let checked = self.core.model.check(*vr, convert(*value));
             checked.map_err(|msg| FmiError::error(format!("{f}: {msg}")))?;
@@ -677,6 +796,22 @@ impl<M: Model> Instance<M> {
                 info.name,
                 inputs.join(", ")
             )));
+        }
+        if f.is_fmi3() && info.structural != (state == State::ConfigurationMode) {
+            return Err(FmiError::error(if info.structural {
+                format!(
+                    "{f}: cannot set `{}` in `{}`: it is a structural parameter, set only in \
+                     configuration mode (fmi3EnterConfigurationMode after instantiation)",
+                    info.name,
+                    state.name_in(true)
+                )
+            } else {
+                format!(
+                    "{f}: cannot set `{}` in configuration mode: only the structural parameters \
+                     may be set there",
+                    info.name
+                )
+            }));
         }
         match info.causality {
             Causality::Output | Causality::Local | Causality::Independent => {
@@ -778,6 +913,13 @@ impl<M: Model> Instance<M> {
                     self.core.interface.name()
                 )));
             }
+            if snapshot.version != self.core.version {
+                return Err(FmiError::error(format!(
+                    "{f}: the FMU state was saved by an instance of the other FMI version \
+                     ({:?}); this one is {:?}: their variables and states differ",
+                    snapshot.version, self.core.version
+                )));
+            }
             self.core.clone_from(snapshot);
             self.trace_state(format_args!("{f}: restored"));
             Ok(Status::Ok)
@@ -862,7 +1004,7 @@ fn bad_reference(
         None => format!("{func}: unknown value reference {vr}: must be below {count}"),
         Some(info) => {
             let fmi3 = func.is_fmi3();
-            let ty = if fmi3 { info.ty.base3() } else { info.ty.base() };
+            let ty = info.base_in(fmi3);
             let a = |name: &str| if name.starts_with('I') { "an" } else { "a" };
             let (is, asked) = (ty.name(fmi3), base.name(fmi3));
             format!(

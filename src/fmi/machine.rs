@@ -20,10 +20,13 @@ pub enum State {
     EventMode,
     ContinuousTimeMode,
     IntermediateUpdate,
+    /// FMI 3.0's Configuration Mode: after instantiation, where the structural parameters
+    /// are set.
+    ConfigurationMode,
 }
 
 impl State {
-    const ALL: [State; 10] = [
+    const ALL: [State; 11] = [
         State::Instantiated,
         State::InitializationMode,
         State::StepComplete,
@@ -34,6 +37,7 @@ impl State {
         State::EventMode,
         State::ContinuousTimeMode,
         State::IntermediateUpdate,
+        State::ConfigurationMode,
     ];
 
     /// After initialization, before the end: stepping (co-simulation) or in event or
@@ -68,6 +72,7 @@ impl State {
             State::EventMode => "event mode",
             State::ContinuousTimeMode => "continuous-time mode",
             State::IntermediateUpdate => "intermediate update mode",
+            State::ConfigurationMode => "configuration mode",
         }
     }
 
@@ -102,8 +107,11 @@ pub(crate) mod mask {
         EventMode,
         ContinuousTimeMode,
         IntermediateUpdate,
+        ConfigurationMode,
     ]);
     pub const INSTANTIATED: u32 = bits(&[Instantiated]);
+    /// FMI 3.0's Configuration Mode.
+    pub const CONFIGURATION: u32 = bits(&[ConfigurationMode]);
     pub const INITIALIZATION: u32 = bits(&[InitializationMode]);
     // Co-simulation's own functions.
     pub const STEP_COMPLETE: u32 = bits(&[StepComplete]);
@@ -188,14 +196,20 @@ impl Interface {
             &[StepComplete, StepFailed, Terminated, IntermediateUpdate],
             StepComplete,
             &[InitializationMode, StepComplete, StepFailed, Terminated, Error, IntermediateUpdate],
-            &[Instantiated, InitializationMode, StepComplete, IntermediateUpdate],
+            &[
+                Instantiated,
+                InitializationMode,
+                StepComplete,
+                IntermediateUpdate,
+                ConfigurationMode,
+            ],
             &[StepComplete, StepFailed],
         );
         const ME: Masks = Interface::make(
             &[EventMode, ContinuousTimeMode, Terminated],
             EventMode,
             &[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error],
-            &[Instantiated, InitializationMode, EventMode, ContinuousTimeMode],
+            &[Instantiated, InitializationMode, EventMode, ContinuousTimeMode, ConfigurationMode],
             &[EventMode, ContinuousTimeMode],
         );
         match self {

@@ -26,7 +26,7 @@ mod snapshot;
 pub use cosim::{
     MAX_PARTS, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_PENDING, STATUS_TERMINATED,
 };
-pub use description::{BaseType, VarInfo, LOG_CATEGORIES};
+pub use description::{BaseType, Dim, Only, VarInfo, Version, LOG_CATEGORIES};
 pub use exchange::{EventInfo, StepEnd};
 pub use instance::{Func, Instance, IntermediateUpdate, Logger};
 pub use machine::{FmiError, FmiResult, Interface, State, Status};

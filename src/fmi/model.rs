@@ -5,7 +5,7 @@
 //! event indicators; arrays sized by a structural parameter), over the same `Model`.
 #![forbid(unsafe_code)]
 
-use super::description::VarInfo;
+use super::description::{VarInfo, Version};
 use super::machine::{Interface, State};
 use crate::visit::StateVisitor;
 use std::fmt;
@@ -79,6 +79,8 @@ pub struct StepFailure {
 pub struct Restore {
     /// The interface of the instance that saved it.
     pub interface: Interface,
+    /// The model description it served.
+    pub version: Version,
     pub setup: Setup,
     /// The instance's state.
     pub state: State,
@@ -104,14 +106,18 @@ pub trait Model: Clone + fmt::Debug + Sized {
     /// The interface's GUID: instantiation and restored states must match it.
     fn guid() -> &'static str;
 
-    /// The model at its start values (instantiation and reset).
-    fn new() -> Self;
+    /// The model at its start values (instantiation and reset), serving the model
+    /// description of `version` (FMI 3.0's has arrays sized by structural parameters).
+    fn new(version: Version) -> Self;
     /// `Err(allowed)` when the model cannot integrate at relative tolerance `tol`.
     fn check_tolerance(tol: f64) -> Result<(), String>;
 
     /// The value of `vr` (a parameter, an input, or an output at the current time, computed
     /// now if need be). In initialization mode outputs are those of the start state.
     fn get(&mut self, vr: u32, setup: &Setup) -> Result<Value, String>;
+    /// The values of array variable `vr` (FMI 3.0), row-major, into `out`, which the core
+    /// has sized from the variable's dimensions.
+    fn get_array(&mut self, vr: u32, setup: &Setup, out: &mut [f64]) -> Result<(), String>;
     /// Whether `vr` takes `value` (its range), without setting it.
     fn check(&self, vr: u32, value: Value) -> Result<(), String>;
     /// Sets `vr` to `value` after the same check. The core has checked that the variable may

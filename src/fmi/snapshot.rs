@@ -17,6 +17,7 @@
 //! give an error, never a panic.
 #![forbid(unsafe_code)]
 
+use super::description::Version;
 use super::machine::{Interface, State};
 use super::model::{Model, Restore, Setup};
 use crate::hash::fnv1a_64;
@@ -28,6 +29,9 @@ use crate::visit::StateVisitor;
 pub struct Snapshot<M> {
     /// The interface of the instance that made it: a state restores only into its own.
     pub(crate) interface: Interface,
+    /// The model description of the instance that made it: a state restores only into an
+    /// instance of the same version (their variables and states differ).
+    pub(crate) version: Version,
     pub(crate) state: State,
     pub(crate) setup: Setup,
     /// The communication time: the start time, then the end of the last step (co-simulation),
@@ -52,22 +56,23 @@ impl<M> Snapshot<M> {
 }
 
 impl<M: Model> Snapshot<M> {
-    pub(crate) fn new(interface: Interface) -> Snapshot<M> {
+    pub(crate) fn new(interface: Interface, version: Version) -> Snapshot<M> {
         Snapshot {
             interface,
+            version,
             state: State::Instantiated,
             setup: Setup::NONE,
             time: 0.0,
             last_successful_time: 0.0,
             terminated: false,
-            model: M::new(),
+            model: M::new(version),
         }
     }
 }
 
 const MAGIC: &[u8; 8] = b"FMUSTATE";
 /// Version of the core's part of the byte format; bump it when [`visit_core`] changes.
-pub const CORE_VERSION: u32 = 6;
+pub const CORE_VERSION: u32 = 7;
 const GUID_LEN: usize = 38;
 /// Bytes of the frame before the payload: magic, version, GUID, payload length.
 pub const HEADER: usize = 8 + 4 + GUID_LEN + 8;
@@ -145,7 +150,7 @@ pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
         return Err("checksum mismatch: the state bytes are corrupt".into());
     }
     let mut reader = Reader { bytes: &body[HEADER..], pos: 0, error: None };
-    let mut snapshot = Snapshot::new(Interface::CoSimulation);
+    let mut snapshot = Snapshot::new(Interface::CoSimulation, Version::Fmi2);
     let visited = visit(&mut snapshot, &mut reader);
     if let Some(e) = reader.error {
         return Err(e);
@@ -169,7 +174,13 @@ fn visit<M: Model>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(),
             format!("field `tolerance` = {tol:?} is out of range: must be {allowed}")
         })?;
     }
-    let at = Restore { interface: s.interface, setup: s.setup, state: s.state, time: s.time };
+    let at = Restore {
+        interface: s.interface,
+        version: s.version,
+        setup: s.setup,
+        state: s.state,
+        time: s.time,
+    };
     s.model.visit_state(v, &at)
 }
 
@@ -201,6 +212,17 @@ fn visit_core<M>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(), S
     s.interface = Interface::from_index(interface).ok_or_else(|| {
         format!("field `interface` = {interface} is not an interface: must be 0 or 1")
     })?;
+    let mut version = s.version as u64;
+    v.count("version", &mut version);
+    s.version = match version {
+        0 => Version::Fmi2,
+        1 => Version::Fmi3,
+        _ => {
+            return Err(format!(
+            "field `version` = {version} is not an FMI version: must be 0 (FMI 2.0) or 1 (FMI 3.0)"
+        ))
+        }
+    };
     let mut state = s.state.to_index();
     v.count("state", &mut state);
     let all = s.interface.masks().fmu_state;

@@ -205,7 +205,9 @@ macro_rules! values_function {
             value: $ptr,
         ) -> fmi2Status {
             // SAFETY: the function's contract is the helper's.
-            unsafe { $helper(c, stringify!($name), vr, nvr, value, |$inst, $vr, $value| $body) }
+            unsafe {
+                $helper(c, stringify!($name), vr, nvr, value, nvr, |$inst, $vr, $value| $body)
+            }
         }
     };
 }

@@ -308,6 +308,20 @@ pub unsafe extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Statu
 /// # Safety
 /// `instance` is an instance from fmi3Instantiate….
 #[no_mangle]
+pub unsafe extern "C" fn fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status {
+    guard(instance, "fmi3EnterConfigurationMode", Instance::enter_configuration_mode)
+}
+
+/// # Safety
+/// `instance` is an instance from fmi3Instantiate….
+#[no_mangle]
+pub unsafe extern "C" fn fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status {
+    guard(instance, "fmi3ExitConfigurationMode", Instance::exit_configuration_mode)
+}
+
+/// # Safety
+/// `instance` is an instance from fmi3Instantiate….
+#[no_mangle]
 pub unsafe extern "C" fn fmi3Terminate(instance: fmi3Instance) -> fmi3Status {
     guard(instance, "fmi3Terminate", Instance::terminate)
 }
@@ -321,23 +335,9 @@ pub unsafe extern "C" fn fmi3Reset(instance: fmi3Instance) -> fmi3Status {
 
 // ----- get and set ----------------------------------------------------------------------------
 
-/// Refuses `nValues` other than the number of value references: every variable is a scalar.
-fn check_scalars(inst: &mut Instance, func: &str, nvr: usize, n_values: usize) -> bool {
-    if nvr == n_values {
-        return true;
-    }
-    inst.log(
-        Status::Error,
-        &format!(
-            "{func}: nValues = {n_values} with {nvr} value references: every variable of this \
-             FMU is a scalar, so they must be equal"
-        ),
-    );
-    false
-}
-
 /// The get and set functions: `$helper` ([`get_values`] or [`set_values`]) checks the
-/// pointers, then `nValues` is checked and `$body` called on the instance and the slices.
+/// pointers and calls `$body` on the instance, the value references and the `nValues`
+/// values (an array's elements all count; the core checks that they add up).
 macro_rules! values_function {
     ($name:ident, $helper:ident, $ptr:ty, |$inst:ident, $vr:ident, $value:pat_param| $body:expr) => {
         /// # Safety
@@ -351,21 +351,16 @@ macro_rules! values_function {
             values: $ptr,
             nValues: usize,
         ) -> fmi3Status {
-            let n = nValueReferences.min(nValues);
-            // SAFETY: `values` holds nValues >= n elements (the function's contract).
+            // SAFETY: each pointer holds its count of elements (the function's contract).
             unsafe {
                 $helper(
                     instance,
                     stringify!($name),
                     valueReferences,
-                    n,
+                    nValueReferences,
                     values,
-                    |$inst, $vr, $value| {
-                        if !check_scalars($inst, stringify!($name), nValueReferences, nValues) {
-                            return Status::Error;
-                        }
-                        $body
-                    },
+                    nValues,
+                    |$inst, $vr, $value| $body,
                 )
             }
         }
@@ -395,6 +390,22 @@ values_function!(fmi3SetInt64, set_values, *const fmi3Int64, |inst, vr, value| i
     vr,
     value,
     |v: i64| crate::fmi::Value::Integer(v.clamp(i32::MIN as i64, i32::MAX as i64) as i32)
+));
+// The structural parameter n_elements: UInt64 in FMI 3.0 (a <Dimension> refers to one), i32
+// in the core (a value beyond saturates, and the model's range check refuses it naming it).
+values_function!(fmi3GetUInt64, get_values, *mut fmi3UInt64, |inst, vr, value| inst.get(
+    "GetUInt64",
+    BaseType::UInt64,
+    vr,
+    value,
+    |v| v.integer().max(0) as u64
+));
+values_function!(fmi3SetUInt64, set_values, *const fmi3UInt64, |inst, vr, value| inst.set(
+    "SetUInt64",
+    BaseType::UInt64,
+    vr,
+    value,
+    |v: u64| crate::fmi::Value::Integer(v.min(i32::MAX as u64) as i32)
 ));
 values_function!(fmi3GetBoolean, get_values, *mut fmi3Boolean, |inst, vr, value| {
     let mut flags = vec![false; vr.len()];
@@ -437,7 +448,6 @@ no_variables! {
     fmi3GetInt16, fmi3SetInt16, fmi3Int16, Int16;
     fmi3GetUInt16, fmi3SetUInt16, fmi3UInt16, UInt16;
     fmi3GetUInt32, fmi3SetUInt32, fmi3UInt32, UInt32;
-    fmi3GetUInt64, fmi3SetUInt64, fmi3UInt64, UInt64;
     fmi3GetString, fmi3SetString, fmi3String, String;
 }
 
@@ -459,14 +469,10 @@ pub unsafe extern "C" fn fmi3GetBinary(
             instance,
             "fmi3GetBinary",
             valueReferences,
-            nValueReferences.min(nValues),
+            nValueReferences,
             values,
-            |i, vr, _| {
-                if !check_scalars(i, "fmi3GetBinary", nValueReferences, nValues) {
-                    return Status::Error;
-                }
-                i.no_variables("GetBinary", BaseType::Binary, false, vr)
-            },
+            nValues,
+            |i, vr, _| i.no_variables("GetBinary", BaseType::Binary, false, vr),
         )
     }
 }
@@ -489,14 +495,10 @@ pub unsafe extern "C" fn fmi3SetBinary(
             instance,
             "fmi3SetBinary",
             valueReferences,
-            nValueReferences.min(nValues),
+            nValueReferences,
             values,
-            |i, vr, _| {
-                if !check_scalars(i, "fmi3SetBinary", nValueReferences, nValues) {
-                    return Status::Error;
-                }
-                i.no_variables("SetBinary", BaseType::Binary, true, vr)
-            },
+            nValues,
+            |i, vr, _| i.no_variables("SetBinary", BaseType::Binary, true, vr),
         )
     }
 }
@@ -519,6 +521,7 @@ pub unsafe extern "C" fn fmi3GetClock(
             valueReferences,
             nValueReferences,
             values,
+            nValueReferences,
             |i, vr, _| i.no_variables("GetClock", BaseType::Clock, false, vr),
         )
     }
@@ -542,6 +545,7 @@ pub unsafe extern "C" fn fmi3SetClock(
             valueReferences,
             nValueReferences,
             values,
+            nValueReferences,
             |i, vr, _| i.no_variables("SetClock", BaseType::Clock, true, vr),
         )
     }
@@ -589,8 +593,6 @@ unsupported! {
         _sensitivity: *mut fmi3Float64,
         _n_sensitivity: usize
     ) => "providesAdjointDerivatives = false";
-    fmi3EnterConfigurationMode() => "the model has no structural parameters";
-    fmi3ExitConfigurationMode() => "the model has no structural parameters";
     fmi3GetIntervalDecimal(
         _vr: *const fmi3ValueReference, _n: usize, _intervals: *mut fmi3Float64,
         _qualifiers: *mut fmi3IntervalQualifier
@@ -724,18 +726,14 @@ pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
         if inst.interface() == Interface::CoSimulation {
             return inst.get_directional_derivative();
         }
-        if !check_scalars(inst, F, nKnowns, nSeed)
-            || !check_scalars(inst, F, nUnknowns, nSensitivity)
-        {
-            return Status::Error;
-        }
-        // SAFETY: each pointer holds its count of elements (the function's contract).
+        // SAFETY: each pointer holds its count of elements (the function's contract); an
+        // array's elements all count in nSeed and nSensitivity, which the model checks.
         let args = unsafe {
             (
                 slice(unknowns, nUnknowns),
                 slice(knowns, nKnowns),
-                slice(seed, nKnowns),
-                slice_mut(sensitivity, nUnknowns),
+                slice(seed, nSeed),
+                slice_mut(sensitivity, nSensitivity),
             )
         };
         match args {
@@ -744,8 +742,8 @@ pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
             }
             (None, ..) => null_arg(inst, F, "unknowns", nUnknowns),
             (_, None, ..) => null_arg(inst, F, "knowns", nKnowns),
-            (_, _, None, _) => null_arg(inst, F, "seed", nKnowns),
-            (.., None) => null_arg(inst, F, "sensitivity", nUnknowns),
+            (_, _, None, _) => null_arg(inst, F, "seed", nSeed),
+            (.., None) => null_arg(inst, F, "sensitivity", nSensitivity),
         }
     })
 }
@@ -969,7 +967,12 @@ pub unsafe extern "C" fn fmi3GetOutputDerivatives(
     const F: &str = "fmi3GetOutputDerivatives";
     let n = nValueReferences;
     guard(instance, F, |inst| {
-        if !check_scalars(inst, F, n, nValues) {
+        if n != nValues {
+            let msg = format!(
+                "{F}: nValues = {nValues} with {n} value references: only scalar outputs have \
+                 derivatives here, so they must be equal"
+            );
+            inst.log(Status::Error, &msg);
             return Status::Error;
         }
         // SAFETY: each pointer holds `n` elements (the function's contract).

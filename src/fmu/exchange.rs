@@ -3,9 +3,11 @@
 //! derivatives, the range of validity as event indicators, and the law's end as a time event.
 #![forbid(unsafe_code)]
 
-use super::variables::{Causality, Var, DERIVATIVES, EVENT_INDICATORS, STATES};
+use super::variables::{
+    Causality, Var, DERIVATIVES, DERIVATIVES3, EVENT_INDICATORS, STATES, STATES3,
+};
 use super::BeamBodyFmu;
-use crate::fmi::{self, EventInfo, Notes, Setup, StepEnd};
+use crate::fmi::{self, EventInfo, Notes, Setup, StepEnd, Version};
 use crate::model::{BeamModel, Kinematics, Phi, PhiPiece, RangeCheck};
 use crate::sim::Equations;
 use crate::solver::RangeViolation;
@@ -33,6 +35,21 @@ impl Exchange {
     /// The piece of φ at the current time, the host's input being `host`.
     fn piece(&self, host: Phi) -> PhiPiece {
         self.eq.piece(self.t, self.turned, host)
+    }
+
+    /// FMI 3.0's state arrays: q (the first half of x), dq (the second), or ddq (the
+    /// second half of x′).
+    pub fn state_array(&self, var: Var, values: &super::values::Values) -> Vec<f64> {
+        let half = self.x.len() / 2;
+        match var {
+            Var::Q => self.x[..half].to_vec(),
+            Var::Dq => self.x[half..].to_vec(),
+            _ => {
+                let mut dx = vec![0.0; self.x.len()];
+                self.eq.derivatives(self.t, self.piece(host(values)), &self.x, &mut dx);
+                dx.split_off(half)
+            }
+        }
     }
 
     pub fn kinematics(&self, values: &super::values::Values) -> Kinematics {
@@ -123,7 +140,9 @@ fn check_fmi2(values: &super::values::Values) -> Result<(), String> {
 impl BeamBodyFmu {
     /// The Model Exchange equations at the start time from the current values.
     pub(super) fn build_exchange(&self, setup: &Setup) -> Result<Exchange, String> {
-        check_fmi2(&self.values)?;
+        if self.version == Version::Fmi2 {
+            check_fmi2(&self.values)?;
+        }
         let t = setup.start_time;
         let eq = Equations::new(&self.values.settings, t, self.values.input.phi)
             .map_err(|e| e.to_string())?;
@@ -218,16 +237,27 @@ impl fmi::ModelExchange for BeamBodyFmu {
     }
 
     fn state_count(&self) -> usize {
-        match &self.exchange {
-            Some(ex) => ex.x.len(),
+        match (&self.exchange, self.version) {
+            (Some(ex), _) => ex.x.len(),
             // FMI 2.0's model description: the four of `STATES` (other beams are refused at
             // ExitInitializationMode, naming them).
-            None => STATES.len(),
+            (None, Version::Fmi2) => STATES.len(),
+            // FMI 3.0's: q and dq, 2·n_elements each.
+            (None, Version::Fmi3) => 4 * self.values.settings.params.n_elements,
         }
     }
 
     fn state_name(&self, k: usize) -> String {
-        STATES.get(k).map_or_else(|| format!("x[{k}]"), |v| format!("`{}`", v.info().name))
+        match self.version {
+            Version::Fmi2 => {
+                STATES.get(k).map_or_else(|| format!("x[{k}]"), |v| format!("`{}`", v.info().name))
+            }
+            Version::Fmi3 => {
+                let half = fmi::ModelExchange::state_count(self) / 2;
+                let (var, j) = if k < half { ("q", k) } else { ("dq", k - half) };
+                format!("x[{k}] (`{var}` element {j})")
+            }
+        }
     }
 
     fn set_time(&mut self, t: f64) {
@@ -307,48 +337,79 @@ impl fmi::ModelExchange for BeamBodyFmu {
         seed: &[f64],
         out: &mut [f64],
     ) -> Result<(), String> {
-        if knowns.len() != seed.len() || unknowns.len() != out.len() {
-            return Err(format!(
-                "{} known value references with {} seeds, {} unknowns with {} values",
-                knowns.len(),
-                seed.len(),
-                unknowns.len(),
-                out.len()
-            ));
-        }
+        let fmi3 = self.version == Version::Fmi3;
+        let (states, derivatives): (&[Var], &[Var]) =
+            if fmi3 { (&STATES3, &DERIVATIVES3) } else { (&STATES, &DERIVATIVES) };
         let names = |vars: &[Var]| -> String {
             let names: Vec<String> =
                 vars.iter().map(|v| format!("`{}` ({})", v.info().name, v.vr())).collect();
             names.join(", ")
         };
         let inputs = [Var::Phi, Var::Dphi, Var::Ddphi];
-        let mut vx = [0.0; 4];
+        let nx = self.exchange().x.len();
+        // Each state variable holds nx / (number of state variables) elements.
+        let per_state = nx / states.len();
+        let mut vx = vec![0.0; nx];
         let mut vu = [0.0; 3];
-        for (vr, s) in knowns.iter().zip(seed) {
-            if let Some(k) = STATES.iter().position(|v| v.vr() == *vr) {
-                vx[k] += s;
+        let mut seeds = seed.iter();
+        let mut too_few = false;
+        for vr in knowns {
+            if let Some(k) = states.iter().position(|v| v.vr() == *vr) {
+                for slot in &mut vx[k * per_state..(k + 1) * per_state] {
+                    match seeds.next() {
+                        Some(s) => *slot += s,
+                        None => too_few = true,
+                    }
+                }
             } else if let Some(k) = inputs.iter().position(|v| v.vr() == *vr) {
-                vu[k] += s;
+                match seeds.next() {
+                    Some(s) => vu[k] += s,
+                    None => too_few = true,
+                }
             } else {
                 return Err(format!(
                     "known value reference {vr} is not a continuous state or an input: must \
                      be one of {}, {}",
-                    names(&STATES),
+                    names(states),
                     names(&inputs)
                 ));
             }
         }
+        if too_few || seeds.next().is_some() {
+            return Err(format!(
+                "{} seeds for the known value references {knowns:?}, whose elements number \
+                 otherwise (an array state counts {per_state})",
+                seed.len()
+            ));
+        }
+        let n_elements = self.values.settings.params.n_elements;
+        let mut sizes = Vec::with_capacity(unknowns.len());
         for vr in unknowns {
-            let computed = Var::from_vr(*vr).is_some_and(|v| {
-                matches!(v.info().causality, Causality::Output | Causality::Local)
+            let var = Var::from_vr(*vr).filter(|v| {
+                let info = v.info();
+                matches!(info.causality, Causality::Output | Causality::Local)
+                    && info.in_version(fmi3)
             });
-            if !computed {
+            let Some(var) = var else {
                 return Err(format!(
                     "unknown value reference {vr} is not an output, a state or a state \
                      derivative: must be one of those of <ModelStructure> (the outputs, {})",
-                    names(&DERIVATIVES)
+                    names(derivatives)
                 ));
-            }
+            };
+            sizes.push(match var.info().dims.len() {
+                0 => 1,
+                1 => n_elements,
+                _ => 2 * n_elements,
+            });
+        }
+        if sizes.iter().sum::<usize>() != out.len() {
+            return Err(format!(
+                "{} sensitivities for the unknown value references {unknowns:?}, which have {} \
+                 elements",
+                out.len(),
+                sizes.iter().sum::<usize>()
+            ));
         }
         let x0: Vec<f64> = self.exchange().x.clone();
         let u0 = [self.values.input.phi, self.values.rates[0], self.values.rates[1]];
@@ -367,11 +428,17 @@ impl fmi::ModelExchange for BeamBodyFmu {
             fmu.values.input.phi = u0[0] + s * vu[0];
             fmu.values.rates = [u0[1] + s * vu[1], u0[2] + s * vu[2]];
             let setup = Setup { tolerance: None, start_time: 0.0, stop_time: None };
-            let got: Result<Vec<f64>, String> = unknowns
-                .iter()
-                .map(|vr| fmi::Model::get(fmu, *vr, &setup).map(fmi::Value::real))
-                .collect();
-            got
+            let mut got = vec![0.0; sizes.iter().sum()];
+            let mut k = 0;
+            for (vr, n) in unknowns.iter().zip(&sizes) {
+                if Var::from_vr(*vr).is_some_and(|v| v.info().dims.is_empty()) {
+                    got[k] = fmi::Model::get(fmu, *vr, &setup)?.real();
+                } else {
+                    fmi::Model::get_array(fmu, *vr, &setup, &mut got[k..k + n])?;
+                }
+                k += n;
+            }
+            Ok(got)
         };
         let plus = values(self, eps);
         let minus = values(self, -eps);

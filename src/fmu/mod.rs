@@ -16,7 +16,7 @@ mod tests_exchange;
 pub mod values;
 pub mod variables;
 
-use crate::fmi::{self, Interface, Notes, Restore, Setup, State, StepFailure, Value};
+use crate::fmi::{self, Interface, Notes, Restore, Setup, State, StepFailure, Value, Version};
 use crate::model::{BeamBody, Kinematics, Reactions};
 use crate::scene::PhiSource;
 use crate::sim::{Run, SimError};
@@ -42,6 +42,9 @@ const STATE_VERSION: u32 = 6;
 /// outputs computed at the current time, and what the host has been told about φ.
 #[derive(Clone, Debug)]
 pub struct BeamBodyFmu {
+    /// The model description the instance serves: FMI 3.0's has arrays sized by
+    /// `n_elements`, and Model Exchange states of any beam.
+    pub version: Version,
     pub values: Values,
     /// The integrator, from ExitInitializationMode on (co-simulation).
     pub run: Option<Run>,
@@ -134,6 +137,43 @@ impl BeamBodyFmu {
         let l = self.values.settings.params.l;
         m = [l - kin.v1.abs(), std::f64::consts::FRAC_PI_2 - kin.theta1.abs()];
         Ok(m[k])
+    }
+
+    /// Every node's (v_k, ϑ_k) at the current time, the tip last
+    /// ([`Run::coordinates_at`]); in initialization mode, of the start state.
+    fn nodal(&mut self, setup: &Setup) -> Result<Vec<f64>, String> {
+        let mut out = Vec::new();
+        match (&self.run, &self.exchange) {
+            (Some(run), _) => run.coordinates_at(self.at, &mut out).map_err(|e| e.to_string())?,
+            (None, Some(ex)) => out = ex.eq.nodal_shape(&ex.x),
+            (None, None) => {
+                let run = self.build_run(setup)?;
+                run.coordinates_at(setup.start_time, &mut out).map_err(|e| e.to_string())?
+            }
+        }
+        Ok(out)
+    }
+
+    /// Model Exchange's states q or dq, or ddq, the derivative of dq; before the run, those
+    /// of the start state. Co-simulation's integrator has its own state (a DAE's holds
+    /// more), so it refuses them once it runs.
+    fn state_array(&mut self, var: &Variable, setup: &Setup) -> Result<Vec<f64>, String> {
+        if self.exchange.is_none() && self.run.is_some() {
+            return Err(format!(
+                "`{}` is a state of Model Exchange; co-simulation gives the beam's shape as \
+                 `nodal_v` and `nodal_theta`",
+                var.name
+            ));
+        }
+        let built;
+        let ex = match &self.exchange {
+            Some(ex) => ex,
+            None => {
+                built = self.build_exchange(setup)?;
+                &built
+            }
+        };
+        Ok(ex.state_array(var.var, &self.values))
     }
 
     /// The model the outputs are computed with.
@@ -297,8 +337,9 @@ impl fmi::Model for BeamBodyFmu {
         variables::guid()
     }
 
-    fn new() -> Self {
+    fn new(version: Version) -> Self {
         BeamBodyFmu {
+            version,
             values: Values::from_table(),
             run: None,
             at: 0.0,
@@ -317,6 +358,9 @@ impl fmi::Model for BeamBodyFmu {
 
     fn get(&mut self, vr: u32, setup: &Setup) -> Result<Value, String> {
         let var = row(vr);
+        if !var.dims.is_empty() {
+            return Err(format!("`{}` is an array: it has no scalar value", var.name));
+        }
         if let Some(k) = INDICATOR_VARIABLES.iter().position(|v| *v == var.var) {
             return self.range_margin(k, setup).map(Value::Real);
         }
@@ -324,6 +368,29 @@ impl fmi::Model for BeamBodyFmu {
             Some(v) => Ok(v),
             None => self.output(var.var, setup).map(Value::Real),
         }
+    }
+
+    fn get_array(&mut self, vr: u32, setup: &Setup, out: &mut [f64]) -> Result<(), String> {
+        let var = row(vr);
+        let values = match var.var {
+            Var::NodalV | Var::NodalTheta => {
+                let odd = usize::from(var.var == Var::NodalTheta);
+                let nodal = self.nodal(setup)?;
+                nodal.iter().skip(odd).step_by(2).copied().collect()
+            }
+            Var::Q | Var::Dq | Var::Ddq => self.state_array(var, setup)?,
+            _ => return Err(format!("`{}` is not an array", var.name)),
+        };
+        if values.len() != out.len() {
+            return Err(format!(
+                "`{}` has {} values at the current parameters, not {}",
+                var.name,
+                values.len(),
+                out.len()
+            ));
+        }
+        out.copy_from_slice(&values);
+        Ok(())
     }
 
     fn check(&self, vr: u32, value: Value) -> Result<(), String> {
@@ -376,6 +443,7 @@ impl fmi::Model for BeamBodyFmu {
     }
 
     fn visit_state<V: StateVisitor>(&mut self, v: &mut V, at: &Restore) -> Result<(), String> {
+        self.version = at.version;
         self.visit_values(v)?;
         if at.interface == Interface::ModelExchange {
             return self.visit_exchange(v, at);

@@ -10,8 +10,8 @@
 #![forbid(unsafe_code)]
 
 pub use crate::fmi::description::{
-    BaseType, Capabilities, Causality, DefaultExperiment, ExchangeCapabilities, Fmi3Capabilities,
-    Type, Unit, VarInfo, Variability, LOG_CATEGORIES,
+    BaseType, Capabilities, Causality, DefaultExperiment, Dim, ExchangeCapabilities,
+    Fmi3Capabilities, Only, Type, Unit, VarInfo, Variability, LOG_CATEGORIES,
 };
 use crate::hash::fnv1a_128;
 use std::fmt;
@@ -141,6 +141,11 @@ pub enum Var {
     RangeMarginV1,
     RangeMarginTheta1,
     IntermediateStep,
+    NodalV,
+    NodalTheta,
+    Q,
+    Dq,
+    Ddq,
 }
 
 impl Var {
@@ -196,6 +201,9 @@ impl fmt::Debug for Variable {
             .field("description", &i.description)
             .field("derivative_of", &i.derivative_of)
             .field("setting", &self.setting)
+            .field("structural", &i.structural)
+            .field("dims", &i.dims)
+            .field("only", &i.only)
             .finish()
     }
 }
@@ -228,6 +236,10 @@ const fn param(var: Var, key: Key) -> Variable {
             ty,
             description: s.description,
             derivative_of: None,
+            // n_elements sizes FMI 3.0's arrays.
+            structural: matches!(key, Key::NElements),
+            dims: &[],
+            only: Only::Both,
         },
         setting: Some(key),
     }
@@ -253,6 +265,9 @@ const fn continuous(
             ty: Type::Real { unit: Some(unit), start, min: None, max: None },
             description,
             derivative_of,
+            structural: false,
+            dims: &[],
+            only: Only::Both,
         },
         setting: None,
     }
@@ -285,7 +300,39 @@ const fn derivative(
     unit: &'static str,
     description: &'static str,
 ) -> Variable {
-    continuous(var, Causality::Local, name, unit, description, Some(of as u32))
+    let v = continuous(var, Causality::Local, name, unit, description, Some(of as u32));
+    Variable { info: VarInfo { only: Only::Fmi2, ..v.info }, ..v }
+}
+
+/// The dimensions of a nodal array: one value per node, n_elements of them.
+const NODES: &[Dim] = &[Dim::Param(Var::NElements as u32)];
+/// The dimensions of the coordinates q and their rates: (n_elements, 2), a node's two
+/// coordinates in a row.
+const NODES_BY_TWO: &[Dim] = &[Dim::Param(Var::NElements as u32), Dim::Fixed(2)];
+
+/// An FMI 3.0 array of reals sized by `dims`: an output, or a local (the Model Exchange
+/// states and their derivatives); `unit` "" for none.
+const fn array(
+    var: Var,
+    causality: Causality,
+    dims: &'static [Dim],
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    derivative_of: Option<Var>,
+) -> Variable {
+    let of = match derivative_of {
+        Some(v) => Some(v as u32),
+        None => None,
+    };
+    let v = continuous(var, causality, name, unit, description, of);
+    // No unit for "": q mixes metres and radians.
+    let ty = if unit.is_empty() {
+        Type::Real { unit: None, start: None, min: None, max: None }
+    } else {
+        v.info.ty
+    };
+    Variable { info: VarInfo { dims, only: Only::Fmi3, ty, ..v.info }, ..v }
 }
 
 /// Every variable, in value-reference order (`VARIABLES[k].vr() == k`, checked by a test).
@@ -432,6 +479,9 @@ pub const VARIABLES: &[Variable] = &[
             ty: Type::Real { unit: Some("s"), start: None, min: None, max: None },
             description: "Simulation time",
             derivative_of: None,
+            structural: false,
+            dims: &[],
+            only: Only::Both,
         },
         setting: None,
     },
@@ -454,6 +504,55 @@ pub const VARIABLES: &[Variable] = &[
         None,
     ),
     param(Var::IntermediateStep, Key::IntermediateStep),
+    array(
+        Var::NodalV,
+        Causality::Output,
+        NODES,
+        "nodal_v",
+        "m",
+        "Deflection v_k of every node k = 1..n_elements at x = k*l/n_elements, the tip last \
+         (the exact beam: the centreline's y at arc length k*l/n_elements)",
+        None,
+    ),
+    array(
+        Var::NodalTheta,
+        Causality::Output,
+        NODES,
+        "nodal_theta",
+        "rad",
+        "Slope theta_k of every node k = 1..n_elements, the tip last (the exact beam: the \
+         section's angle)",
+        None,
+    ),
+    array(
+        Var::Q,
+        Causality::Local,
+        NODES_BY_TWO,
+        "q",
+        "",
+        "Generalized coordinates, a row per node (Model Exchange's states): (v_k, theta_k) of \
+         the quadratic beam in m and rad; the exact beam's own coordinates",
+        None,
+    ),
+    array(
+        Var::Dq,
+        Causality::Local,
+        NODES_BY_TWO,
+        "dq",
+        "",
+        "Rates of the generalized coordinates q (Model Exchange's states)",
+        Some(Var::Q),
+    ),
+    array(
+        Var::Ddq,
+        Causality::Local,
+        NODES_BY_TWO,
+        "ddq",
+        "",
+        "Accelerations of the generalized coordinates: the time derivative of dq (Model \
+         Exchange)",
+        Some(Var::Dq),
+    ),
 ];
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates
@@ -462,6 +561,11 @@ pub const VARIABLES: &[Variable] = &[
 pub const STATES: [Var; 4] = [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1];
 /// Their derivatives, in the same order.
 pub const DERIVATIVES: [Var; 4] = [Var::DerV1, Var::DerTheta1, Var::DerDv1, Var::DerDtheta1];
+/// FMI 3.0 Model Exchange's continuous states: the arrays q and dq, sized by n_elements,
+/// so that it runs any beam (ARCHITECTURE.md, "FMI 3.0").
+pub const STATES3: [Var; 2] = [Var::Q, Var::Dq];
+/// Their derivatives, in the same order.
+pub const DERIVATIVES3: [Var; 2] = [Var::Dq, Var::Ddq];
 /// The number of event indicators: the margins of the range of validity, l − |v1| and
 /// π/2 − |ϑ1|.
 pub const EVENT_INDICATORS: usize = 2;
@@ -496,7 +600,7 @@ pub fn guid() -> &'static str {
     let bytes = GUID.get_or_init(|| {
         let text = format!(
             "{MODEL_IDENTIFIER}|{MODEL_NAME}|{MODEL_DESCRIPTION}|{DEFAULT_EXPERIMENT:?}|\
-             {CAPABILITIES:?}|{EXCHANGE_CAPABILITIES:?}|{FMI3_CAPABILITIES:?}|{STATES:?}|{EVENT_INDICATORS}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
+             {CAPABILITIES:?}|{EXCHANGE_CAPABILITIES:?}|{FMI3_CAPABILITIES:?}|{STATES:?}|{STATES3:?}|{EVENT_INDICATORS}|{UNITS:?}|{ENUM_TYPES:?}|{LOG_CATEGORIES:?}|{VARIABLES:?}"
         );
         let h = fnv1a_128(text.as_bytes());
         let formatted = format!(

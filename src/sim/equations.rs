@@ -162,6 +162,15 @@ impl Equations {
         }
     }
 
+    /// Every node's (v_k, ϑ_k) at x, the tip last ([`BeamN::nodal_shape`]); (v1, ϑ1) for
+    /// the paper's model.
+    pub fn nodal_shape(&self, x: &[f64]) -> Vec<f64> {
+        match &self.elements {
+            None => x[..2].to_vec(),
+            Some(e) => e.nodal_shape(&x[..e.dofs()]),
+        }
+    }
+
     /// The tip's deflection and slope (v1, ϑ1) at x ([`BeamN::tip_values`]).
     pub fn tip(&self, x: &[f64]) -> (f64, f64) {
         match &self.elements {

@@ -218,7 +218,7 @@ fn every_get_and_set_of_the_wrong_type_is_refused_naming_the_variable() {
     h.expect_ok(h.enter()); // initialization mode: every get and set is allowed
     let all = |h: &Host| {
         let of = |base: BaseType| -> Vec<fmi2ValueReference> {
-            VARIABLES.iter().filter(|v| v.ty.base() == base).map(|v| v.vr()).collect()
+            fmi2_variables().filter(|v| v.ty.base() == base).map(|v| v.vr()).collect()
         };
         let (s1, reals) = h.get_reals(&of(BaseType::Real));
         let (s2, ints) = h.get_integers(&of(BaseType::Integer));
@@ -228,7 +228,7 @@ fn every_get_and_set_of_the_wrong_type_is_refused_naming_the_variable() {
     };
     let before = all(&h);
     let mut refused = 0;
-    for var in VARIABLES {
+    for var in fmi2_variables() {
         let base = var.ty.base();
         let vrs = [var.vr()];
         let needles = |func: &'static str| {
@@ -261,7 +261,7 @@ fn every_get_and_set_of_the_wrong_type_is_refused_naming_the_variable() {
         }
     }
     // Each variable: 2 functions of each of the 2 other numeric types, and 2 string ones.
-    assert_eq!(refused, VARIABLES.len() * 6);
+    assert_eq!(refused, fmi2_variables().count() * 6);
     for bad in [VARIABLES.len() as u32, 9999, u32::MAX] {
         let msg = format!("unknown value reference {bad}");
         let mut out: [fmi2String; 1] = [null()];
@@ -508,4 +508,22 @@ fn do_step_respects_a_defined_stop_time_only() {
         bad.expect_error(s, &["fmi2SetupExperiment", needle, "out of range"]);
     }
     bad.expect_ok(bad.setup(None, 0.0, Some(0.0)));
+}
+
+/// The variables of FMI 2.0's model description (FMI 3.0's arrays are not among them).
+fn fmi2_variables() -> impl Iterator<Item = &'static beam_body::fmu::variables::Variable> {
+    VARIABLES.iter().filter(|v| v.in_version(false))
+}
+
+/// FMI 3.0's arrays are refused by an FMI 2.0 instance, naming the version.
+#[test]
+fn fmi3_s_arrays_are_not_fmi2_s() {
+    let _g = shared();
+    let h = Host::new("arrays");
+    h.expect_ok(h.setup(None, 0.0, None));
+    h.expect_ok(h.enter());
+    for var in VARIABLES.iter().filter(|v| !v.in_version(false)) {
+        let s = h.get_reals(&[var.vr()]).0;
+        h.expect_error(s, &["fmi2GetReal", &format!("`{}`", var.name), "FMI 3.0's only"]);
+    }
 }

@@ -158,6 +158,18 @@ fn calls() -> Vec<Call> {
     vec![
         ("fmi3EnterInitializationMode", &[CsInstantiated, MeInstantiated], |h| h.enter(None)),
         ("fmi3ExitInitializationMode", &[CsInit, MeInit], |h| h.exit()),
+        // Configuration mode, from `instantiated` only (no tunable structural parameter, so
+        // no reconfiguration mode); left at once, so that the state is `instantiated` again.
+        ("fmi3EnterConfigurationMode", &[CsInstantiated, MeInstantiated], |h| {
+            let s = unsafe { fmi3EnterConfigurationMode(h.c) };
+            if s == OK {
+                h.ok(unsafe { fmi3ExitConfigurationMode(h.c) });
+            }
+            s
+        }),
+        ("fmi3ExitConfigurationMode", &[], |h| unsafe { fmi3ExitConfigurationMode(h.c) }),
+        // The structural parameter: in configuration mode only (tested there in main.rs).
+        ("fmi3SetUInt64", &[], |h| unsafe { fmi3SetUInt64(h.c, &vr(Var::NElements), 1, &2, 1) }),
         ("fmi3Terminate", &[StepMode, StepDiscarded, Event, Continuous], |h| unsafe {
             fmi3Terminate(h.c)
         }),
@@ -237,7 +249,7 @@ fn calls() -> Vec<Call> {
             "fmi3GetDirectionalDerivative",
             &[MeInit, Event, Continuous, MeTerminated, MeError],
             |h| {
-                let (u, k, seed, mut out) = ([vr(Var::DerV1)], [vr(Var::Dv1)], [1.0], [0.0]);
+                let (u, k, seed, mut out) = ([vr(Var::Ddq)], [vr(Var::Dq)], [1.0, 0.0], [0.0; 2]);
                 unsafe {
                     fmi3GetDirectionalDerivative(
                         h.c,
@@ -246,9 +258,9 @@ fn calls() -> Vec<Call> {
                         k.as_ptr(),
                         1,
                         seed.as_ptr(),
-                        1,
+                        2,
                         out.as_mut_ptr(),
-                        1,
+                        2,
                     )
                 }
             },
@@ -256,7 +268,7 @@ fn calls() -> Vec<Call> {
     ]
 }
 
-/// Every call of the table in every state of both interfaces: 22 calls × 12 states.
+/// Every call of the table in every state of both interfaces: 25 calls × 12 states.
 #[test]
 fn every_call_in_every_state() {
     let mut counts = (0, 0);
@@ -296,6 +308,6 @@ fn every_call_in_every_state() {
         }
     }
     // The table's own count, so that a shrunk table fails.
-    assert_eq!(counts.0 + counts.1, 22 * 12);
+    assert_eq!(counts.0 + counts.1, 25 * 12);
     assert!(counts.1 > counts.0, "{counts:?}");
 }

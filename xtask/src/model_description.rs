@@ -179,15 +179,28 @@ pub fn initial_unknown_indices() -> Vec<usize> {
     indices(is_initial_unknown)
 }
 
-/// Whether `<ModelStructure>` lists the variable among the initial unknowns: the outputs
-/// (the states are outputs) and the state derivatives, all calculated. Neither FMI 2.0 nor
+/// Whether `<ModelStructure>` lists the variable among the initial unknowns: the outputs,
+/// the states and the state derivatives, all calculated. Neither FMI 2.0 nor
 /// FMI 3.0 lists other locals there (FMI 3.0 §2.4.8 forbids the event indicators).
 pub(crate) fn is_initial_unknown(v: &Variable) -> bool {
-    v.causality == Causality::Output || v.derivative_of.is_some()
+    v.causality == Causality::Output || v.derivative_of.is_some() || is_state(v)
+}
+
+/// Whether a variable is a continuous state: another is its derivative. FMI 2.0's states
+/// are outputs; FMI 3.0's (the array q) are calculated locals, initial unknowns too.
+pub(crate) fn is_state(v: &Variable) -> bool {
+    VARIABLES.iter().any(|d| d.derivative_of == Some(v.vr()) && d.only == v.only)
 }
 
 fn indices(keep: impl Fn(&Variable) -> bool) -> Vec<usize> {
-    VARIABLES.iter().enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
+    variables(false).enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
+}
+
+/// The variables of FMI 3.0's model description (`fmi3`) or FMI 2.0's, in value-reference
+/// order: FMI 3.0's arrays come after every variable both have, so FMI 2.0's 1-based
+/// indices are the same as without them.
+pub fn variables(fmi3: bool) -> impl Iterator<Item = &'static Variable> {
+    VARIABLES.iter().filter(move |v| v.in_version(fmi3))
 }
 
 /// The rules the tables must follow for the XML to be valid FMI 2.0 and 3.0, checked before
@@ -470,7 +483,7 @@ pub fn generate() -> Result<String> {
     write_categories_and_experiment(&mut doc)?;
 
     doc.start("ModelVariables", vec![]);
-    for v in VARIABLES {
+    for v in variables(false) {
         write_variable(&mut doc, v)?;
     }
     doc.end("ModelVariables");
@@ -526,7 +539,7 @@ pub(crate) mod tests {
 
     use beam_body::fmu::variables::{
         self as vars, Causality, Type, Variability, CAPABILITIES, DEFAULT_EXPERIMENT, ENUM_TYPES,
-        EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS, VARIABLES,
+        EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS,
     };
 
     use super::{generate, real, Description, FMI2};
@@ -777,8 +790,8 @@ pub(crate) mod tests {
     fn every_scalar_variable_matches_the_table() {
         let root = root();
         let elements = &root.child("ModelVariables").unwrap().children;
-        assert_eq!(elements.len(), VARIABLES.len());
-        for (e, v) in elements.iter().zip(VARIABLES) {
+        assert_eq!(elements.len(), super::variables(false).count());
+        for (e, v) in elements.iter().zip(super::variables(false)) {
             let at = |what: &str| format!("variable {}: {what}", v.name);
             assert_eq!(e.name, "ScalarVariable");
             let a = attrs(
@@ -859,7 +872,11 @@ pub(crate) mod tests {
     fn model_structure_lists_outputs_derivatives_and_initial_unknowns() {
         let root = root();
         let rows = |keep: &dyn Fn(&vars::Variable) -> bool| -> Vec<usize> {
-            VARIABLES.iter().enumerate().filter(|(_, v)| keep(v)).map(|(r, _)| r + 1).collect()
+            super::variables(false)
+                .enumerate()
+                .filter(|(_, v)| keep(v))
+                .map(|(r, _)| r + 1)
+                .collect()
         };
         let outputs = rows(&|v| v.causality == Causality::Output);
         let derivatives = rows(&|v| v.derivative_of.is_some());

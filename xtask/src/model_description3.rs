@@ -22,15 +22,15 @@
 //!   `<EventIndicator>` (in the order of fmi3GetEventIndicators).
 
 use beam_body::fmu::variables::{
-    self as vars, Causality, Type, Var, Variability, Variable, CAPABILITIES, DERIVATIVES,
+    self as vars, Causality, Dim, Type, Var, Variability, Variable, CAPABILITIES, DERIVATIVES3,
     ENUM_TYPES, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES, INDICATOR_VARIABLES, INTERMEDIATE_INPUTS,
-    UNITS, VARIABLES,
+    UNITS,
 };
 
 use crate::model_description::{
     boolean, check_rules, enumeration_attrs, header, initial, integer_attrs, is_initial_unknown,
-    real_attrs, variable_attrs, write_categories_and_experiment, write_items, write_units, Attrs,
-    Doc,
+    real_attrs, variable_attrs, variables, write_categories_and_experiment, write_items,
+    write_units, Attrs, Doc,
 };
 use crate::Result;
 
@@ -44,19 +44,19 @@ fn vrs(vars: &[Var]) -> Vec<u32> {
 
 /// The value references of the outputs, for `<Output>`, in value-reference order.
 pub fn output_vrs() -> Vec<u32> {
-    VARIABLES.iter().filter(|v| v.causality == Causality::Output).map(Variable::vr).collect()
+    variables(true).filter(|v| v.causality == Causality::Output).map(Variable::vr).collect()
 }
 
 /// The value references of the state derivatives, for `<ContinuousStateDerivative>`: the
-/// order of the continuous states ([`DERIVATIVES`]).
+/// order of the continuous states ([`DERIVATIVES3`]: the arrays dq and ddq).
 pub fn derivative_vrs() -> Vec<u32> {
-    vrs(&DERIVATIVES)
+    vrs(&DERIVATIVES3)
 }
 
 /// The value references of the initial unknowns, for `<InitialUnknown>`: the outputs and the
 /// state derivatives, in value-reference order.
 pub fn initial_unknown_vrs() -> Vec<u32> {
-    VARIABLES.iter().filter(|v| is_initial_unknown(v)).map(Variable::vr).collect()
+    variables(true).filter(|v| is_initial_unknown(v)).map(Variable::vr).collect()
 }
 
 /// The value references of the event indicators, for `<EventIndicator>`, in the order of
@@ -67,11 +67,8 @@ pub fn event_indicator_vrs() -> Vec<u32> {
 
 /// The rules FMI 3.0 adds to FMI 2.0's ([`check_rules`]), over the whole table.
 fn check_rules3() -> Result {
-    let independent: Vec<&str> = VARIABLES
-        .iter()
-        .filter(|v| v.causality == Causality::Independent)
-        .map(|v| v.name)
-        .collect();
+    let independent: Vec<&str> =
+        variables(true).filter(|v| v.causality == Causality::Independent).map(|v| v.name).collect();
     if independent.len() != 1 {
         return Err(format!(
             "FMI 3.0 needs exactly one independent variable; the table has {independent:?}"
@@ -103,7 +100,7 @@ fn check_rules3() -> Result {
     }
     // Model Exchange lists every state derivative, and only those.
     let with_derivative: Vec<u32> =
-        VARIABLES.iter().filter(|v| v.derivative_of.is_some()).map(Variable::vr).collect();
+        variables(true).filter(|v| v.derivative_of.is_some()).map(Variable::vr).collect();
     let mut listed = derivative_vrs();
     listed.sort_unstable();
     if listed != with_derivative {
@@ -119,7 +116,7 @@ fn check_rules3() -> Result {
 
 /// The whole FMI 3.0 modelDescription.xml.
 pub fn generate() -> Result<String> {
-    for v in VARIABLES {
+    for v in variables(true) {
         check_rules(v)?;
     }
     check_rules3()?;
@@ -178,7 +175,7 @@ pub fn generate() -> Result<String> {
     write_categories_and_experiment(&mut doc)?;
 
     doc.start("ModelVariables", vec![]);
-    for v in VARIABLES {
+    for v in variables(true) {
         write_variable(&mut doc, v)?;
     }
     doc.end("ModelVariables");
@@ -220,6 +217,14 @@ fn interface_flags(provides_directional_derivatives: bool) -> Attrs {
 
 fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
     let mut attrs = variable_attrs(v);
+    if v.structural {
+        // FMI 3.0 §2.4.7.4: a structural parameter, which a <Dimension> refers to.
+        for (key, value) in attrs.iter_mut() {
+            if *key == "causality" {
+                *value = "structuralParameter".into();
+            }
+        }
+    }
     if INTERMEDIATE_INPUTS.contains(&v.var) {
         attrs.push(("intermediateUpdate", boolean(true)));
     }
@@ -238,6 +243,11 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
             }
             "Float64"
         }
+        Type::Integer { start, min, max } if v.structural => {
+            // A <Dimension> refers to a UInt64 (FMI 3.0 §2.4.7.4).
+            attrs.extend(integer_attrs(start, min.max(0), max));
+            "UInt64"
+        }
         Type::Integer { start, min, max } => {
             attrs.extend(integer_attrs(start, min, max));
             "Int32"
@@ -251,7 +261,19 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
             "Boolean"
         }
     };
-    doc.empty(element, attrs);
+    if v.dims.is_empty() {
+        doc.empty(element, attrs);
+        return Ok(());
+    }
+    doc.start(element, attrs);
+    for d in v.dims {
+        let attr = match *d {
+            Dim::Param(vr) => ("valueReference", vr.to_string()),
+            Dim::Fixed(k) => ("start", k.to_string()),
+        };
+        doc.empty("Dimension", vec![attr]);
+    }
+    doc.end(element);
     Ok(())
 }
 
@@ -261,9 +283,9 @@ mod tests {
     //! FMI 2.0 one and compared with the tables directly, not with the generator's code.
 
     use beam_body::fmu::variables::{
-        self as vars, Causality, Type, Var, Variability, CAPABILITIES, DERIVATIVES, ENUM_TYPES,
-        EVENT_INDICATORS, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES, INDICATOR_VARIABLES,
-        INTERMEDIATE_INPUTS, UNITS, VARIABLES,
+        self as vars, Causality, Dim, Only, Type, Var, Variability, CAPABILITIES, DERIVATIVES3,
+        ENUM_TYPES, EVENT_INDICATORS, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES,
+        INDICATOR_VARIABLES, INTERMEDIATE_INPUTS, UNITS, VARIABLES,
     };
 
     use super::generate;
@@ -441,10 +463,32 @@ mod tests {
     fn every_variable_matches_the_table() {
         let root = root();
         let elements = &root.child("ModelVariables").unwrap().children;
-        assert_eq!(elements.len(), VARIABLES.len());
-        for (e, v) in elements.iter().zip(VARIABLES) {
+        let table: Vec<_> = VARIABLES.iter().filter(|v| v.only != Only::Fmi2).collect();
+        assert_eq!(elements.len(), table.len());
+        for (e, v) in elements.iter().zip(table) {
             let at = |what: &str| format!("variable {}: {what}", v.name);
-            assert!(e.children.is_empty(), "{}", at("no child elements"));
+            // An array's <Dimension>s, outermost first: a structural parameter's value
+            // reference, or a fixed size.
+            let dims: Vec<Dim> = e
+                .children
+                .iter()
+                .map(|d| {
+                    assert_eq!(d.name, "Dimension", "{}", at("child"));
+                    let a = attrs(d, &["valueReference", "start"]);
+                    match (a.get("valueReference"), a.get("start")) {
+                        (Some(vr), None) => Dim::Param(vr.parse().unwrap()),
+                        (None, Some(k)) => Dim::Fixed(k.parse().unwrap()),
+                        _ => panic!("{}", at("a dimension has one of its two attributes")),
+                    }
+                })
+                .collect();
+            assert_eq!(dims, v.dims, "{}", at("dimensions"));
+            for d in v.dims {
+                if let Dim::Param(vr) = d {
+                    let sized_by = &VARIABLES[*vr as usize];
+                    assert!(sized_by.structural, "{}", at("sized by a structural parameter"));
+                }
+            }
             const COMMON: [&str; 7] = [
                 "name",
                 "valueReference",
@@ -458,6 +502,7 @@ mod tests {
                 Type::Real { .. } => {
                     ("Float64", &["declaredType", "start", "min", "max", "derivative"])
                 }
+                Type::Integer { .. } if v.structural => ("UInt64", &["start", "min", "max"]),
                 Type::Integer { .. } => ("Int32", &["start", "min", "max"]),
                 Type::Enumeration { .. } => ("Enumeration", &["declaredType", "start"]),
                 Type::Boolean { .. } => ("Boolean", &["start"]),
@@ -470,6 +515,9 @@ mod tests {
             assert_eq!(a["valueReference"].parse::<u32>().unwrap(), v.vr(), "{}", at("vr"));
             assert_eq!(a["description"], v.description, "{}", at("description"));
             let (causality, variability, initial) = match v.causality {
+                Causality::Parameter if v.structural => {
+                    ("structuralParameter", "fixed", Some("exact"))
+                }
                 Causality::Parameter => ("parameter", "fixed", Some("exact")),
                 Causality::Input => ("input", "continuous", None),
                 Causality::Output => ("output", "continuous", Some("calculated")),
@@ -507,7 +555,7 @@ mod tests {
                 }
                 Type::Integer { start, min, max } => {
                     for (key, value) in [("start", start), ("min", min), ("max", max)] {
-                        assert_eq!(a[key].parse::<i32>().unwrap(), value, "{}", at(key));
+                        assert_eq!(a[key].parse::<i64>().unwrap(), value as i64, "{}", at(key));
                     }
                 }
                 Type::Enumeration { ty, start } => {
@@ -542,13 +590,17 @@ mod tests {
     fn model_structure_lists_outputs_derivatives_unknowns_and_indicators() {
         let root = root();
         let vrs = |keep: &dyn Fn(&vars::Variable) -> bool| -> Vec<u32> {
-            VARIABLES.iter().filter(|v| keep(v)).map(|v| v.vr()).collect()
+            VARIABLES.iter().filter(|v| v.only != Only::Fmi2 && keep(v)).map(|v| v.vr()).collect()
         };
         let outputs = vrs(&|v| v.causality == Causality::Output);
         let derivatives = vrs(&|v| v.derivative_of.is_some());
-        let unknowns = vrs(&|v| v.causality == Causality::Output || v.derivative_of.is_some());
+        // The outputs, the states (q, whose derivative is dq) and the state derivatives.
+        let is_state =
+            |v: &vars::Variable| VARIABLES.iter().any(|d| d.derivative_of == Some(v.vr()));
+        let unknowns =
+            vrs(&|v| v.causality == Causality::Output || v.derivative_of.is_some() || is_state(v));
         let indicators: Vec<u32> = INDICATOR_VARIABLES.iter().map(|v| v.vr()).collect();
-        assert_eq!(derivatives, DERIVATIVES.map(Var::vr));
+        assert_eq!(derivatives, DERIVATIVES3.map(Var::vr));
         assert_eq!(indicators.len(), EVENT_INDICATORS);
 
         let structure = root.child("ModelStructure").unwrap();
@@ -571,12 +623,16 @@ mod tests {
             .collect();
         assert_eq!(written, expected);
 
-        // Each derivative names a state, in the order of the states; the states are outputs,
-        // and so initial unknowns already.
+        // Each derivative names a state, in the order of the states: the arrays q and dq, of
+        // n_elements rows of two, so that x = (q, dq) is the model's order.
         let by_vr = |vr: u32| &VARIABLES[vr as usize];
         let states: Vec<&str> =
             derivatives.iter().map(|&d| by_vr(by_vr(d).derivative_of.unwrap()).name).collect();
-        assert_eq!(states, ["v1", "theta1", "dv1", "dtheta1"]);
+        assert_eq!(states, ["q", "dq"]);
+        let n_elements = Dim::Param(Var::NElements.vr());
+        for &d in &derivatives {
+            assert_eq!(by_vr(d).dims, [n_elements, Dim::Fixed(2)]);
+        }
         let indicator_names: Vec<&str> = indicators.iter().map(|&vr| by_vr(vr).name).collect();
         assert_eq!(indicator_names, ["range_margin_v1", "range_margin_theta1"]);
         assert!(indicators.iter().all(|vr| !unknowns.contains(vr)));
