@@ -19,8 +19,12 @@ from fmu_util import MODEL_DESCRIPTION3_XML
 
 #: FMI 3.0's platform tuples of the desktop platforms (the folders under binaries/).
 TUPLES = {"x86_64-linux", "x86_64-windows", "x86_64-darwin", "aarch64-darwin", "aarch64-linux"}
-#: The continuous states, in the order of fmi3GetContinuousStates, and the event indicators.
-STATES = ["v1", "theta1", "dv1", "dtheta1"]
+#: The continuous states, in the order of fmi3GetContinuousStates: the arrays q and dq, of n_elements rows of
+#: two (FMI 2.0's are the scalars v1, theta1, dv1, dtheta1). Then the event indicators.
+STATES = ["q", "dq"]
+#: FMI 3.0's own variables (arrays sized by n_elements), and FMI 2.0's (its scalar state derivatives).
+ONLY3 = ["nodal_v", "nodal_theta", "q", "dq", "ddq"]
+ONLY2 = ["der(v1)", "der(theta1)", "der(dv1)", "der(dtheta1)"]
 INDICATORS = ["range_margin_v1", "range_margin_theta1"]
 #: FMI 2.0's element of each type, in FMI 3.0.
 TYPES = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
@@ -113,9 +117,18 @@ def test_phi_is_the_one_intermediate_update_input(xml3):
 
 
 def test_states_and_event_indicators(md3):
+    # At the start value n_elements = 1: two arrays of one row of two.
     assert md3.numberOfContinuousStates == 4
     assert [d.variable.derivative.name for d in md3.derivatives] == STATES
-    assert [d.variable.name for d in md3.derivatives] == [f"der({s})" for s in STATES]
+    assert [d.variable.name for d in md3.derivatives] == ["dq", "ddq"]
+    n_elements = next(v for v in md3.modelVariables if v.name == "n_elements")
+    for d in md3.derivatives:
+        for v in (d.variable, d.variable.derivative):
+            assert [dim.variable for dim in v.dimensions[:1]] == [n_elements], v.name
+            assert v.shape == (1, 2), v.name
+    # The states are initial unknowns (calculated locals), as their derivatives are.
+    unknowns = {u.variable.name for u in md3.initialUnknowns}
+    assert {"q", "dq", "ddq"} <= unknowns
     # FMI 3.0: `derivative` is the state's value reference.
     for d in md3.derivatives:
         assert d.variable.derivative.valueReference in {v.valueReference for v in md3.modelVariables}
@@ -127,12 +140,38 @@ def test_states_and_event_indicators(md3):
     assert [o.variable.name for o in md3.outputs] == outputs
 
 
+def test_n_elements_is_a_structural_parameter_sizing_the_arrays(md3, xml3):
+    """n_elements is a UInt64 structural parameter (a <Dimension> refers to one, FMI 3.0 §2.4.7.4), fixed, with
+    FMI 2.0's start and range; the nodal shape has one value per node, q, dq and ddq a row of two per node."""
+    by_name = {v.name: v for v in md3.modelVariables}
+    n = by_name["n_elements"]
+    assert (n.type, n.causality, n.variability) == ("UInt64", "structuralParameter", "fixed")
+    # FMPy 0.3.32 reads no range of a UInt64: from the XML.
+    element = next(v for v in xml3.find("ModelVariables") if v.get("name") == "n_elements")
+    assert (element.get("start"), element.get("min"), element.get("max")) == ("1", "1", "32")
+    arrays = [v.name for v in md3.modelVariables if v.dimensions]
+    assert arrays == ONLY3
+    for name in ONLY3:
+        v = by_name[name]
+        assert v.type == "Float64" and v.dimensions[0].variable is n, name
+        assert v.shape == ((1,) if name.startswith("nodal") else (1, 2)), name
+    assert [by_name[x].causality for x in ONLY3] == ["output", "output", "local", "local", "local"]
+    assert by_name["nodal_v"].declaredType.unit == "m" and by_name["nodal_theta"].declaredType.unit == "rad"
+
+
 def test_every_variable_is_the_fmi2_one(md3, fmu_model_description):
-    """The same variables as the FMI 2.0 archive, in the same order, with the same value references,
-    causality, variability, initial, start, unit and range; each in FMI 3.0's element of its type."""
-    v2s, v3s = fmu_model_description.modelVariables, md3.modelVariables
+    """The variables both archives have, in the same order, with the same value references, causality,
+    variability, initial, start, unit and range; each in FMI 3.0's element of its type. FMI 3.0 has its arrays
+    besides, and FMI 2.0 its scalar state derivatives; n_elements is FMI 3.0's structural parameter."""
+    v2s = [v for v in fmu_model_description.modelVariables if v.name not in ONLY2]
+    v3s = [v for v in md3.modelVariables if v.name not in ONLY3]
+    assert [v.name for v in fmu_model_description.modelVariables if v.name in ONLY2] == ONLY2
+    assert [v.name for v in md3.modelVariables if v.name in ONLY3] == ONLY3
     assert [v.name for v in v3s] == [v.name for v in v2s]
     for v2, v3 in zip(v2s, v3s):
+        if v2.name == "n_elements":
+            assert (v3.type, v3.causality, v3.start) == ("UInt64", "structuralParameter", v2.start)
+            continue
         assert v3.type == TYPES[v2.type], v2.name
         # `initial` as FMPy reads it: written, or its default (exact, for the inputs, in both versions).
         for attribute in ("valueReference", "description", "causality", "variability", "initial", "start",
