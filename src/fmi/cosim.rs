@@ -147,6 +147,7 @@ impl<M: CoSimulation> Instance<M> {
         let f = self.func("DoStep");
         let r = self.check_step(f, tc, h).and_then(|target| {
             trace!(self, "{f}: tc = {tc}, h = {h}");
+            self.core.model.begin_step();
             self.advance(f, tc, target)
         });
         self.status(r)
@@ -160,6 +161,7 @@ impl<M: CoSimulation> Instance<M> {
         let f = self.func("DoStep");
         let r = self.check_step(f, tc, h).inspect(|_| {
             trace!(self, "{f}: tc = {tc}, h = {h}, with intermediate update");
+            self.core.model.begin_step();
         });
         self.edge(r)
     }

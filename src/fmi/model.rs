@@ -144,6 +144,10 @@ pub trait CoSimulation: Model {
     /// The highest order of input derivatives a host may send.
     const MAX_INPUT_DERIVATIVE_ORDER: i32;
 
+    /// A communication step begins: the calls of [`do_step`](Self::do_step) up to its end
+    /// (one, or the parts of an FMI 3.0 step with intermediate update) share one budget of
+    /// work, so that a step returns in bounded time however it is cut.
+    fn begin_step(&mut self);
     /// Integrates from the communication time `from` to exactly `to`. Warnings (also those
     /// of a step that then fails) go to `notes`.
     fn do_step(&mut self, from: f64, to: f64, notes: &mut Notes) -> Result<(), StepFailure>;

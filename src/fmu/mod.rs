@@ -60,6 +60,12 @@ pub struct BeamBodyFmu {
     /// The host's intermediate-update callback set no φ: the next step extends the samples
     /// held. Set and used within one fmi3DoStep, so not part of the FMU state.
     hold: bool,
+    /// What is left of the current communication step's budget of integrator steps
+    /// ([`MAX_STEPS_PER_DO_STEP`]), shared by the parts of an FMI 3.0 step with intermediate
+    /// update. Reset at each step's start, so not part of the FMU state.
+    budget: u64,
+    /// The budget of a communication step: [`MAX_STEPS_PER_DO_STEP`] (tests lower it).
+    pub(crate) step_budget: u64,
     /// The equations a host integrates (Model Exchange), from ExitInitializationMode on, or
     /// built in initialization mode for the start state.
     pub exchange: Option<Box<exchange::Exchange>>,
@@ -346,6 +352,8 @@ impl fmi::Model for BeamBodyFmu {
             stop: f64::INFINITY,
             exit_ahead: false,
             hold: false,
+            budget: MAX_STEPS_PER_DO_STEP,
+            step_budget: MAX_STEPS_PER_DO_STEP,
             exchange: None,
             cache: Cache::default(),
             phi: PhiNotes::default(),
@@ -512,8 +520,24 @@ impl fmi::CoSimulation for BeamBodyFmu {
     /// known up to `to` only; the fixed step is the paper's one step per communication
     /// step). A step that fails past `to` (the range left just after it) fails this
     /// DoStep at `to`, where the outputs are complete.
+    fn begin_step(&mut self) {
+        self.budget = self.step_budget;
+    }
+
     fn do_step(&mut self, from: f64, to: f64, notes: &mut Notes) -> Result<(), StepFailure> {
         self.check_phi_sent(notes);
+        let spent = |budget: u64, t: f64| StepFailure {
+            t,
+            message: format!(
+                "the communication step has taken its {budget} integrator steps in its parts \
+                 before t = {t:?}: use shorter communication steps"
+            ),
+        };
+        if self.budget == 0 {
+            return Err(spent(self.step_budget, from));
+        }
+        // An earlier part of this step spent some of the budget.
+        let shared = self.budget < self.step_budget;
         let sample = crate::model::Sample { t: from, ..self.values.input };
         self.values.input.dphi = None;
         self.values.input.ddphi = None;
@@ -521,6 +545,8 @@ impl fmi::CoSimulation for BeamBodyFmu {
         // `to` may pass the stop time by the core's rounding allowance: never stop before it.
         let (ahead, stop) = (self.runs_ahead(), self.stop.max(to));
         let run = self.run.as_mut().expect("a started model has a run");
+        run.set_max_steps(self.budget);
+        let steps_before = run.stats().steps;
         if self.exit_ahead {
             // The last step, past the last communication time, left the range at its end.
             if to < run.t() {
@@ -542,11 +568,17 @@ impl fmi::CoSimulation for BeamBodyFmu {
             }
             run.step_to(to)
         };
+        self.budget = self.budget.saturating_sub(run.stats().steps - steps_before);
         match stepped {
             // Running ahead, the step that crossed `to` left the range after it: this step is
             // complete; the one that reaches the exit fails there.
             Err(SimError::Solver(SolverError::OutOfRange { .. })) if ahead && run.t() > to => {
                 self.exit_ahead = true;
+            }
+            Err(SimError::Solver(SolverError::TooManySteps { .. })) if shared => {
+                let t = run.t().min(to);
+                self.at = t;
+                return Err(spent(self.step_budget, t));
             }
             Err(e) => {
                 let t = run.t().min(to);

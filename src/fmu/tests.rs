@@ -335,3 +335,51 @@ fn input_derivatives_are_phi_s_only() {
     }
     assert_eq!(inst.set_real_input_derivatives(&[Var::Phi.vr()], &[1], &[1.0]), Status::Ok);
 }
+
+/// The parts of one communication step (FMI 3.0's intermediate update) share one budget of
+/// integrator steps: parts that each fit in it fail once their sum passes it, and the next
+/// step has the whole budget again.
+#[test]
+fn the_parts_of_a_step_share_its_budget_of_integrator_steps() {
+    use crate::fmi::{CoSimulation, Interface, Model, Setup, State, Value, Version};
+    let started = || {
+        let mut fmu = super::BeamBodyFmu::new(Version::Fmi3);
+        let setup = Setup { tolerance: Some(1e-8), start_time: 0.0, stop_time: None };
+        let law = Value::Integer(2);
+        Model::set(&mut fmu, Var::PhiSource.vr(), law, State::Instantiated, &mut Vec::new())
+            .unwrap();
+        fmu.start(&setup, Interface::CoSimulation).unwrap();
+        fmu
+    };
+    let (part, parts) = (0.01, 30);
+    let mut notes = Vec::new();
+    // One step of 30 parts with the whole budget: the steps of each part.
+    let mut a = started();
+    a.begin_step();
+    let mut per_part = Vec::new();
+    for k in 0..parts {
+        let before = a.budget;
+        a.do_step(k as f64 * part, (k + 1) as f64 * part, &mut notes).unwrap();
+        per_part.push(before - a.budget);
+    }
+    let total: u64 = per_part.iter().sum();
+    let largest = *per_part.iter().max().unwrap();
+    assert!(4 * largest < total, "{per_part:?}");
+    // Half that budget: the same parts fail part way, each well within it.
+    let mut b = started();
+    b.step_budget = total / 2;
+    b.begin_step();
+    let mut t = 0.0;
+    let failed = loop {
+        match b.do_step(t, t + part, &mut notes) {
+            Ok(()) => t += part,
+            Err(e) => break e,
+        }
+        assert!(t < parts as f64 * part, "the budget of {} steps was never spent", total / 2);
+    };
+    assert!(failed.message.contains("integrator steps in its parts"), "{}", failed.message);
+    assert!(t > 2.0 * part, "spent after {t} s: {per_part:?}");
+    // A new step has the whole budget again.
+    b.begin_step();
+    b.do_step(failed.t, failed.t + part, &mut notes).unwrap();
+}

@@ -279,6 +279,17 @@ impl Run {
         self.piece
     }
 
+    /// The most steps one call of [`step_to`](Self::step_to) (or its like) takes from now on:
+    /// what is left of a budget shared by several calls (at least 1).
+    pub fn set_max_steps(&mut self, max_steps: u64) {
+        self.max_steps = max_steps.max(1);
+        match &mut self.bdf {
+            Integrator::TwoDof(b) => b.set_max_steps(max_steps),
+            Integrator::Dae(b) => b.set_max_steps(max_steps),
+            Integrator::Elements(b) => b.set_max_steps(max_steps),
+        }
+    }
+
     pub fn stats(&self) -> Stats {
         match &self.bdf {
             Integrator::TwoDof(b) => *b.stats(),

@@ -395,6 +395,11 @@ where
         &self.cfg
     }
 
+    /// The most steps one call of [`advance`](Self::advance) takes (at least 1).
+    pub fn set_max_steps(&mut self, max_steps: u64) {
+        self.cfg.max_steps = max_steps.max(1);
+    }
+
     /// The solver as a state read from this one's: the stability guard's modes computed if
     /// they are pending.
     #[cfg(test)]
