@@ -54,8 +54,13 @@
  *   6. misuse:  calls that must return fmi3Error without crashing: a NULL instance; an FMI 2.0
  *               instance passed to fmi3DoStep and an FMI 3.0 one to fmi2DoStep (both still usable
  *               after, and equal after a step); fmi3InstantiateScheduledExecution (NULL);
- *               fmi3EnterConfigurationMode; fmi3UpdateDiscreteStates in co-simulation; fmi3DoStep
- *               with a NULL out-argument. Each refusal logs exactly one error (none for NULL).
+ *               in configuration mode a parameter that is not structural, and leaving it twice;
+ *               fmi3UpdateDiscreteStates in co-simulation; fmi3DoStep with a NULL out-argument.
+ *               Each refusal logs exactly one error (none for NULL).
+ *   7. arrays:  n_elements = 4 set in configuration mode; co-simulation with the law, 100 steps
+ *               of 8.5 ms: nodal_v read with nValues = 4 after each (never past the array), its
+ *               last element v1 bit for bit; nValues = 3 refused. Model Exchange with
+ *               n_elements = 2: 8 continuous states, finite derivatives.
  *
  * usage: host UNZIPDIR [--fmi3] [--cycles N] [--threads K] [-o TRAJ.csv] [--me-out TRAJ.csv]
  *                     [--so LIB] [--save-state S STATE.bin] [--resume STATE.bin]
@@ -533,6 +538,8 @@ typedef fmi3Status fmi3SetFloat64TYPE(fmi3Instance, const fmi3ValueReference[], 
                                       const fmi3Float64[], size_t nValues);
 typedef fmi3Status fmi3SetInt64TYPE(fmi3Instance, const fmi3ValueReference[], size_t,
                                     const fmi3Int64[], size_t nValues);
+typedef fmi3Status fmi3SetUInt64TYPE(fmi3Instance, const fmi3ValueReference[], size_t,
+                                     const uint64_t[], size_t nValues);
 typedef fmi3Status fmi3GetFMUStateTYPE(fmi3Instance, fmi3FMUState *);
 typedef fmi3Status fmi3SetFMUStateTYPE(fmi3Instance, fmi3FMUState);
 typedef fmi3Status fmi3FreeFMUStateTYPE(fmi3Instance, fmi3FMUState *);
@@ -605,6 +612,8 @@ typedef struct {
     fmi3InstanceFunctionTYPE *Terminate;
     fmi3InstanceFunctionTYPE *Reset;
     fmi3InstanceFunctionTYPE *EnterConfigurationMode;
+    fmi3InstanceFunctionTYPE *ExitConfigurationMode;
+    fmi3SetUInt64TYPE *SetUInt64;
     fmi3GetFloat64TYPE *GetFloat64;
     fmi3SetFloat64TYPE *SetFloat64;
     fmi3SetInt64TYPE *SetInt64;
@@ -636,6 +645,7 @@ typedef struct {
     fmi2ValueReference ei, phi_end, phi_source, v1, theta1, u2;
     fmi2ValueReference phi, fixed_step, phi_interpolation; /* for --bench-dostep */
     fmi2ValueReference time, intermediate_step;            /* FMI 3.0 only */
+    fmi2ValueReference n_elements, nodal_v;                /* FMI 3.0 only: arrays */
 } Model;
 
 #define PHI_SOURCE_INPUT 1
@@ -870,7 +880,9 @@ static int read_model(const char *unzipdir, int fmi3, Model *m, Err *err) {
         find_vr(xml, m, "Enumeration", "phi_interpolation", &m->phi_interpolation, err))
         goto out;
     if (fmi3 && (find_vr(xml, m, "Float64", "time", &m->time, err) ||
-                 find_vr(xml, m, "Float64", "intermediate_step", &m->intermediate_step, err)))
+                 find_vr(xml, m, "Float64", "intermediate_step", &m->intermediate_step, err) ||
+                 find_vr(xml, m, "UInt64", "n_elements", &m->n_elements, err) ||
+                 find_vr(xml, m, "Float64", "nodal_v", &m->nodal_v, err)))
         goto out;
     rc = 0;
 out:
@@ -943,6 +955,8 @@ static int load_api3(Lib lib, Api3 *api, Err *err) {
     SYM(Terminate);
     SYM(Reset);
     SYM(EnterConfigurationMode);
+    SYM(ExitConfigurationMode);
+    SYM(SetUInt64);
     SYM(GetFloat64);
     SYM(SetFloat64);
     SYM(SetInt64);
@@ -2175,6 +2189,96 @@ static int check_intermediate(const Api3 *f, const Model *m, const char *resourc
     return 0;
 }
 
+/* ----- 7 (FMI 3.0): arrays sized by a structural parameter ---------------------------------- */
+
+#define ARR_N 4       /* elements of the co-simulation run */
+#define ARR_N_ME 2    /* elements of the Model Exchange instance */
+#define ARR_STEPS 100 /* steps of H */
+
+/* Co-simulation of the beam in ARR_N elements (n_elements set in configuration mode): after
+ * every step nodal_v, read with nValues = ARR_N, is finite and ends in v1 (the tip last), and
+ * nValues = ARR_N - 1 is refused; Model Exchange in ARR_N_ME elements has 4 ARR_N_ME states,
+ * whose derivatives are finite. */
+static int check_arrays(const Api3 *f, const Model *m, const char *resources, Err *err) {
+    const char *who = "arrays";
+    LogCtx ctx, *lc = &ctx;
+    ctx_init(&ctx, who);
+    int rc = -1;
+    const fmi3Int64 law = PHI_SOURCE_LAW;
+    const uint64_t n = ARR_N, n_me = ARR_N_ME;
+    double v[ARR_N + 1], v1 = NAN, t = 0.0, bend = 0.0;
+    double x[4 * ARR_N_ME], dx[4 * ARR_N_ME];
+    bool a = false, b = false, d = false, flags[4];
+    size_t nx = 0;
+    fmi3Instance me = NULL;
+    fmi3Instance c = f->InstantiateCoSimulation(who, m->guid, resources, fmi3False, fmi3False,
+                                                fmi3False, fmi3False, NULL, 0, &ctx, logger3, NULL);
+    if (!c) return fail(err, "%s: fmi3InstantiateCoSimulation returned NULL (%s)", who, ctx.last);
+    OK(f->EnterConfigurationMode(c));
+    OK(f->SetUInt64(c, &m->n_elements, 1, &n, 1));
+    OK(f->ExitConfigurationMode(c));
+    OK(f->SetInt64(c, &m->phi_source, 1, &law, 1));
+    OK(f->EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3True, T_END));
+    OK(f->ExitInitializationMode(c));
+    for (int k = 0; k < ARR_STEPS; k++) {
+        OK(f->DoStep(c, k * H, H, fmi3True, &a, &b, &d, &t));
+        v[ARR_N] = 12345.0; /* a canary past the array: never written */
+        OK(f->GetFloat64(c, &m->nodal_v, 1, v, ARR_N));
+        OK(f->GetFloat64(c, &m->v1, 1, &v1, 1));
+        for (int j = 0; j < ARR_N; j++)
+            if (!isfinite(v[j])) {
+                fail(err, "%s: nodal_v[%d] = %g at t = %g", who, j, v[j], t);
+                goto out;
+            }
+        if (bits(v[ARR_N - 1]) != bits(v1) || v[ARR_N] != 12345.0) {
+            fail(err, "%s: at t = %g nodal_v ends in %.17g, v1 = %.17g (canary %g)", who, t,
+                 v[ARR_N - 1], v1, v[ARR_N]);
+            goto out;
+        }
+        bend = fmax(bend, fabs(v1));
+    }
+    REFUSED(f->GetFloat64(c, &m->nodal_v, 1, v, ARR_N - 1));
+    OK(f->Terminate(c));
+
+    me = f->InstantiateModelExchange(who, m->guid, resources, fmi3False, fmi3False, &ctx, logger3);
+    if (!me) {
+        fail(err, "%s: fmi3InstantiateModelExchange returned NULL (%s)", who, ctx.last);
+        goto out;
+    }
+    OK(f->EnterConfigurationMode(me));
+    OK(f->SetUInt64(me, &m->n_elements, 1, &n_me, 1));
+    OK(f->ExitConfigurationMode(me));
+    OK(f->SetInt64(me, &m->phi_source, 1, &law, 1));
+    OK(f->GetNumberOfContinuousStates(me, &nx));
+    if (nx != 4 * ARR_N_ME) {
+        fail(err, "%s: %zu continuous states in %d elements, expected %d", who, nx, ARR_N_ME,
+             4 * ARR_N_ME);
+        goto out;
+    }
+    OK(f->EnterInitializationMode(me, fmi3False, 0.0, 0.0, fmi3True, T_END));
+    OK(f->ExitInitializationMode(me));
+    OK(f->UpdateDiscreteStates(me, &flags[0], &flags[1], &flags[2], &flags[3], &a, &t));
+    OK(f->EnterContinuousTimeMode(me));
+    OK(f->GetContinuousStates(me, x, nx));
+    OK(f->SetTime(me, 0.1));
+    OK(f->SetContinuousStates(me, x, nx));
+    OK(f->GetContinuousStateDerivatives(me, dx, nx));
+    for (size_t j = 0; j < nx; j++)
+        if (!isfinite(dx[j])) {
+            fail(err, "%s: derivative %zu = %g", who, j, dx[j]);
+            goto out;
+        }
+    printf("arrays n_elements=%d steps=%d max_abs_v1=%.6f me_n_elements=%d me_states=%zu\n", ARR_N,
+           ARR_STEPS, bend, ARR_N_ME, nx);
+    rc = 0;
+out:
+    f->FreeInstance(c);
+    f->FreeInstance(me);
+    if (rc == 0 && (ctx.count[fmi3Warning] || ctx.count[fmi3Discard]))
+        rc = fail(err, "%s: the FMU logged warnings: %s", who, ctx.last);
+    return rc;
+}
+
 /* ----- 6 (FMI 3.0): misuse ------------------------------------------------------------------ */
 
 /* A call on a NULL instance: fmi3Error, and no message (there is no logger to send it to). */
@@ -2228,21 +2332,24 @@ static int check_misuse(const Api *f2, const Api3 *f, const Model *m, const char
     }
     refused++;
 
-    /* Co-simulation: no configuration mode (no structural parameters), no event mode, no NULL
-     * out-argument. */
+    /* Co-simulation: in configuration mode only the structural parameter may be set, and it
+     * is left once; no event mode, no NULL out-argument. */
     c = f->InstantiateCoSimulation(who, m->guid, resources, fmi3False, fmi3False, fmi3False,
                                    fmi3False, NULL, 0, &ctx, logger3, NULL);
     if (!c) {
         fail(err, "%s: fmi3InstantiateCoSimulation returned NULL (%s)", who, ctx.last);
         goto out;
     }
-    REFUSED(f->EnterConfigurationMode(c));
+    OK(f->EnterConfigurationMode(c));
+    REFUSED(f->SetInt64(c, &m->phi_source, 1, &law, 1));
+    OK(f->ExitConfigurationMode(c));
+    REFUSED(f->ExitConfigurationMode(c));
     OK(f->SetInt64(c, &m->phi_source, 1, &law, 1));
     OK(f->EnterInitializationMode(c, fmi3False, 0.0, 0.0, fmi3True, T_END));
     OK(f->ExitInitializationMode(c));
     REFUSED(f->UpdateDiscreteStates(c, &flags[0], &flags[1], &flags[2], &flags[3], &a, &t));
     REFUSED(f->DoStep(c, 0.0, H, fmi3True, &a, &b, NULL, &t));
-    refused += 3;
+    refused += 4;
 
     /* An FMI 2.0 instance of the same library: the versions do not mix, either way. */
     cb2 = (fmi2CallbackFunctions){logger, calloc, free, NULL, &ctx2};
@@ -2513,7 +2620,8 @@ int main(int argc, char **argv) {
     if (threads > 0 && check_threads(&host, threads, &err)) goto failed;
     if (check_exchange(&host, me_csv, &err)) goto failed;
     if (fmi3 && (check_intermediate(&g3.f, &model, resources, &err) ||
-                 check_misuse(&api2, &g3.f, &model, resources, &err)))
+                 check_misuse(&api2, &g3.f, &model, resources, &err) ||
+                 check_arrays(&g3.f, &model, resources, &err)))
         goto failed;
 
     long bad = atomic_load(&g_bad_log);

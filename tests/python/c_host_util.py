@@ -31,13 +31,16 @@ THREADS = 8
 WARNINGS = ["-Wall", "-Wextra", "-Werror"]
 
 # host.c's check 5 (--fmi3): IU_STEPS communication steps of IU_H, the FMU's intermediate_step IU_DT,
-# |v1 - the law's run| below IU_TOL; check 6 refuses MISUSE_REFUSED calls.
+# |v1 - the law's run| below IU_TOL; check 6 refuses MISUSE_REFUSED calls; check 7 runs co-simulation in
+# ARRAYS_N elements (nodal_v read as an array) and Model Exchange in ARRAYS_N_ME (4 states each).
 IU_H = 0.0085
 IU_DT = 1e-3
 IU_STEPS = 200
 IU_TOL = 1e-5
 MAX_PARTS = 1e2  # the FMU's bound on the parts of one step (src/fmi/cosim.rs, MAX_PARTS)
-MISUSE_REFUSED = 11
+MISUSE_REFUSED = 12
+ARRAYS_N = 4
+ARRAYS_N_ME = 2
 FMI3_EXPORTS = 75
 
 
@@ -120,6 +123,10 @@ def fmi3_summary_problems(s: dict[str, dict[str, str]], cycles: int, threads: in
     if not float(iu.get("max_dv1", "nan")) < IU_TOL:
         problems.append(f"intermediate max_dv1 = {iu.get('max_dv1')} m, not below {IU_TOL:g}")
     expect("misuse refused", s.get("misuse", {}).get("refused"), str(MISUSE_REFUSED))
+    arrays = s.get("arrays", {})
+    expect("arrays (n_elements, Model Exchange's n_elements and states)",
+           (arrays.get("n_elements"), arrays.get("me_n_elements"), arrays.get("me_states")),
+           (str(ARRAYS_N), str(ARRAYS_N_ME), str(4 * ARRAYS_N_ME)))
     return problems
 
 

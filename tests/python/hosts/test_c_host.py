@@ -34,10 +34,14 @@ tc + h exactly; fmi3UpdateDiscreteStates's six); then
   callbacks, 8 a step, the FMU's rule's number (computed here independently, intermediate_callbacks) and
   times; v1 within 1e-5 m of the law's run at rtol 1e-8 (measured 2.2e-6 m; with phi at the communication
   points only 2.4e-4 m; at the default rtol 1e-6 the integrator's own error, 6.0e-5 m, would hide it);
-- check 6, 11 calls refused with fmi3Error and no crash: NULL instance (4 functions), an FMI 2.0 instance
-  to fmi3DoStep and an FMI 3.0 one to fmi2DoStep, fmi3InstantiateScheduledExecution (NULL),
-  fmi3EnterConfigurationMode, fmi3UpdateDiscreteStates in co-simulation, a NULL out-argument of
-  fmi3DoStep, fmi3DoStep on Model Exchange.
+- check 6, 12 calls refused with fmi3Error and no crash: NULL instance (4 functions), an FMI 2.0 instance
+  to fmi3DoStep and an FMI 3.0 one to fmi2DoStep, fmi3InstantiateScheduledExecution (NULL), in
+  configuration mode a parameter that is not structural and fmi3ExitConfigurationMode twice,
+  fmi3UpdateDiscreteStates in co-simulation, a NULL out-argument of fmi3DoStep, fmi3DoStep on Model
+  Exchange;
+- check 7, arrays: n_elements = 4 set in configuration mode (fmi3SetUInt64), 100 co-simulation steps with
+  nodal_v read with nValues = 4 (its last element v1, bit for bit; nothing written past it), nValues = 3
+  refused; Model Exchange with n_elements = 2 has 8 continuous states.
 Measured: 0.14 s natively (FMI 2.0's run: 0.05 s); under valgrind, one run of checks 1-6 with 100 cycles
 and 2 threads, the library unloaded and reloaded once: 3.2 s, no error, nothing lost.
 
@@ -110,7 +114,7 @@ def native(host_exe, fmu_unzipdir, tmp_path_factory):
 @pytest.fixture(scope="module")
 def native3(host_exe, fmu3_unzipdir, tmp_path_factory):
     """The same run through FMI 3.0 (--fmi3) on the FMI 3.0 archive: checks 1-4 with the full counts,
-    then 5 (intermediate update) and 6 (misuse)."""
+    then 5 (intermediate update), 6 (misuse) and 7 (arrays)."""
     traj = tmp_path_factory.mktemp("c_host_run_fmi3") / "paper.csv"
     me = traj.with_name("paper_me.csv")
     proc, seconds = run_host(

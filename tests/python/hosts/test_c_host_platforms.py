@@ -25,7 +25,7 @@ FMI 3.0: the same host with --fmi3 on the FMI 3.0 archive ($BEAM_BODY_FMU_FMI3) 
 binaries/x86_64-windows/BeamBody.dll under wine and binaries/aarch64-linux/BeamBody.so under qemu, and
 runs checks 1-4 through FMI 3.0 (FMI3_CYCLES cycles and FMI3_THREADS threads: fewer than FMI 2.0's, the
 same C code), the intermediate-update callback (check 5: the count of the FMU's rule, 1600, and v1 within
-1e-5 m of the law's run) and the misuse refusals (check 6). Then, bit for bit, its scene and its Model
+1e-5 m of the law's run), the misuse refusals (check 6) and the arrays (check 7). Then, bit for bit, its scene and its Model
 Exchange trajectory on each emulated platform equal the native FMI 2.0 runs' (test_c_host.py compares
 the native FMI 3.0 run with them). Check 5 sets phi with the platform's own sin, so its v1 is only
 reported against the native --fmi3 run's (measured: identical on both). Times: 2.7 s under wine (its
