@@ -6,8 +6,8 @@
 use std::fmt::Write as _;
 
 use beam_body::fmu::variables::{
-    self as vars, EnumType, Type, Variable, CAPABILITIES, DEFAULT_EXPERIMENT, FORMULATION_TYPE,
-    PHI_SOURCE_TYPE, VARIABLES,
+    self as vars, Dim, EnumType, Only, Type, Variable, CAPABILITIES, DEFAULT_EXPERIMENT,
+    FORMULATION_TYPE, PHI_SOURCE_TYPE, VARIABLES,
 };
 
 use crate::model_description::{causality_name, initial, variability_name};
@@ -24,12 +24,28 @@ fn item_value(ty: &EnumType, name: &str) -> usize {
     })
 }
 
+/// The type, with what differs between the versions: FMI 3.0's arrays (their dimensions) and
+/// structural parameter, FMI 2.0's own variables.
 fn type_cell(v: &Variable) -> String {
-    match v.ty {
+    let base = match v.ty {
         Type::Real { .. } => "Real".into(),
         Type::Integer { .. } => "Integer".into(),
         Type::Enumeration { ty, .. } => format!("Enumeration ({})", esc(ty.name)),
         Type::Boolean { .. } => "Boolean".into(),
+    };
+    let dims: Vec<String> = v
+        .dims
+        .iter()
+        .map(|d| match *d {
+            Dim::Param(vr) => VARIABLES[vr as usize].name.to_string(),
+            Dim::Fixed(k) => k.to_string(),
+        })
+        .collect();
+    match v.only {
+        Only::Fmi3 => format!("{base}[{}], FMI 3.0 only", dims.join(", ")),
+        Only::Fmi2 => format!("{base}, FMI 2.0 only"),
+        Only::Both if v.structural => format!("{base} (FMI 3.0: UInt64, structural parameter)"),
+        Only::Both => base,
     }
 }
 
