@@ -107,16 +107,27 @@ impl<M: fmt::Debug> fmt::Debug for Instance<M> {
     }
 }
 
-/// "`name` (vr) = value, …" for the traces of get and set calls; formatted only when a
-/// trace is written.
-struct Listing<'a, M, T>(&'a [u32], &'a [T], std::marker::PhantomData<M>);
+/// "`name` (vr) = value, …" for the traces of get and set calls, an array's elements in
+/// brackets (`sizes`: each reference's count of values, one each without it); formatted only
+/// when a trace is written.
+struct Listing<'a, M, T>(&'a [u32], &'a [T], Option<&'a [usize]>, std::marker::PhantomData<M>);
 
 impl<M: Model, T: fmt::Debug> fmt::Display for Listing<'_, M, T> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (k, (vr, value)) in self.0.iter().zip(self.1).enumerate() {
-            let name = M::variable(*vr).map_or("?", |v| v.name);
+        let mut at = 0;
+        for (k, vr) in self.0.iter().enumerate() {
+            let info = M::variable(*vr);
+            let name = info.map_or("?", |v| v.name);
             let sep = if k == 0 { "" } else { ", " };
-            write!(f, "{sep}`{name}` ({vr}) = {value:?}")?;
+            let n = self.2.map_or(1, |sizes| sizes[k]);
+            let values = &self.1[at.min(self.1.len())..(at + n).min(self.1.len())];
+            at += n;
+            match values {
+                [one] if info.is_none_or(|v| v.dims.is_empty()) => {
+                    write!(f, "{sep}`{name}` ({vr}) = {one:?}")?
+                }
+                _ => write!(f, "{sep}`{name}` ({vr}) = {values:?}")?,
+            }
         }
         if self.0.is_empty() {
             write!(f, "no variables")?;
@@ -126,7 +137,7 @@ impl<M: Model, T: fmt::Debug> fmt::Display for Listing<'_, M, T> {
 }
 
 fn listing<'a, M, T>(vrs: &'a [u32], values: &'a [T]) -> Listing<'a, M, T> {
-    Listing(vrs, values, std::marker::PhantomData)
+    Listing(vrs, values, None, std::marker::PhantomData)
 }
 
 impl<M: Model> Instance<M> {
@@ -609,6 +620,10 @@ impl<M: Model> Instance<M> {
         let mut sizes = Vec::with_capacity(vrs.len());
         for vr in vrs {
             let info = Self::lookup(f, *vr, base)?;
+            if !info.dims.is_empty() && base != BaseType::Real {
+                // Every array is a Float64 ([`Model::get_array`]).
+                return Err(bad_reference(f, *vr, base, Some(info), M::variable_count()));
+            }
             sizes.push(self.len_of(info));
         }
         let total: usize = sizes.iter().sum();
@@ -664,10 +679,25 @@ impl<M: Model> Instance<M> {
         let f = self.func(name);
         let r = (|| {
             self.allowed(f, self.masks().get)?;
+            // Scalars only (every FMI 2.0 call, most FMI 3.0 ones): one value each, no sizes.
+            if vrs.iter().all(|vr| M::variable(*vr).is_none_or(|v| v.dims.is_empty())) {
+                if vrs.len() != out.len() {
+                    return Err(FmiError::error(format!(
+                        "{f}: {} value references but {} values",
+                        vrs.len(),
+                        out.len()
+                    )));
+                }
+                for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                    *slot = convert(self.get_value(f, *vr, base)?);
+                }
+                trace!(self, "{f}: {}", listing::<M, T>(vrs, out));
+                return Ok(Status::Ok);
+            }
             let sizes = self.sizes(f, base, vrs, out.len())?;
             let mut k = 0;
             let mut array = Vec::new();
-            for (vr, n) in vrs.iter().zip(sizes) {
+            for (vr, &n) in vrs.iter().zip(&sizes) {
                 let info = Self::lookup(f, *vr, base)?;
                 if info.dims.is_empty() {
                     out[k] = convert(self.get_value(f, *vr, base)?);
@@ -680,7 +710,8 @@ impl<M: Model> Instance<M> {
                 }
                 k += n;
             }
-            trace!(self, "{f}: {}", listing::<M, T>(vrs, out));
+            let listed = Listing::<M, T>(vrs, out, Some(&sizes), std::marker::PhantomData);
+            trace!(self, "{f}: {listed}");
             Ok(Status::Ok)
         })();
         self.status(r)

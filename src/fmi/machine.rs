@@ -183,8 +183,10 @@ impl Interface {
             set: mask::bits(set),
             running,
             terminate: mask::bits(terminate),
-            // Not inside fmi3DoStep's callback: the step is half done.
-            fmu_state: (get | mask::INSTANTIATED) & !mask::bits(&[IntermediateUpdate]),
+            // Not inside fmi3DoStep's callback: the step is half done. FMI 3.0's configuration
+            // mode, in the super state "FMU State Setable" as every state is, may hold one.
+            fmu_state: (get | mask::INSTANTIATED | mask::CONFIGURATION)
+                & !mask::bits(&[IntermediateUpdate]),
         }
     }
 

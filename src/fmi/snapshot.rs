@@ -225,7 +225,11 @@ fn visit_core<M>(s: &mut Snapshot<M>, v: &mut impl StateVisitor) -> Result<(), S
     };
     let mut state = s.state.to_index();
     v.count("state", &mut state);
-    let all = s.interface.masks().fmu_state;
+    let mut all = s.interface.masks().fmu_state;
+    if s.version == Version::Fmi2 {
+        // FMI 2.0 has no configuration mode.
+        all &= !super::machine::mask::CONFIGURATION;
+    }
     s.state = State::from_index(state).filter(|st| st.bit() & all != 0).ok_or_else(|| {
         format!(
             "field `state` = {state} is not a state a {} FMU state can hold",

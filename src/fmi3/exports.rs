@@ -408,7 +408,8 @@ values_function!(fmi3SetUInt64, set_values, *const fmi3UInt64, |inst, vr, value|
     |v: u64| crate::fmi::Value::Integer(v.min(i32::MAX as u64) as i32)
 ));
 values_function!(fmi3GetBoolean, get_values, *mut fmi3Boolean, |inst, vr, value| {
-    let mut flags = vec![false; vr.len()];
+    // As many as nValues: the core checks that they are the value references' count.
+    let mut flags = vec![false; value.len()];
     let status = inst.get_boolean(vr, &mut flags);
     if status == Status::Ok {
         for (out, f) in value.iter_mut().zip(flags) {

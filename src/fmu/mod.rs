@@ -160,26 +160,26 @@ impl BeamBodyFmu {
         Ok(out)
     }
 
-    /// Model Exchange's states q or dq, or ddq, the derivative of dq; before the run, those
-    /// of the start state. Co-simulation's integrator has its own state (a DAE's holds
-    /// more), so it refuses them once it runs.
+    /// Model Exchange's states q or dq, or ddq, the derivative of dq: the host's states
+    /// (Model Exchange), the run's (co-simulation), or the start state's (before either).
     fn state_array(&mut self, var: &Variable, setup: &Setup) -> Result<Vec<f64>, String> {
-        if self.exchange.is_none() && self.run.is_some() {
-            return Err(format!(
-                "`{}` is a state of Model Exchange; co-simulation gives the beam's shape as \
-                 `nodal_v` and `nodal_theta`",
-                var.name
-            ));
+        if let Some(ex) = &self.exchange {
+            return Ok(ex.state_array(var.var, &self.values));
         }
-        let built;
-        let ex = match &self.exchange {
-            Some(ex) => ex,
-            None => {
-                built = self.build_exchange(setup)?;
-                &built
-            }
+        let mut motion = Vec::new();
+        match &self.run {
+            Some(run) => run.motion_at(self.at, &mut motion),
+            None => self.build_run(setup)?.motion_at(setup.start_time, &mut motion),
+        }
+        .map_err(|e| e.to_string())?;
+        // (q, q̇, q̈), a third each.
+        let n = motion.len() / 3;
+        let k = match var.var {
+            Var::Q => 0,
+            Var::Dq => 1,
+            _ => 2,
         };
-        Ok(ex.state_array(var.var, &self.values))
+        Ok(motion[k * n..(k + 1) * n].to_vec())
     }
 
     /// The model the outputs are computed with.

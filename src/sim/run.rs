@@ -634,6 +634,28 @@ impl Run {
         }
     }
 
+    /// The beam's generalized coordinates q, their rates q̇ and accelerations q̈ at `t` inside
+    /// the last step (dense output), each in `out` in turn: Model Exchange's states and their
+    /// derivatives. The paper's two coordinates (v1, ϑ1) in every formulation (a DAE's own
+    /// state has u2 besides); every node's for n elements.
+    pub fn motion_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
+        out.clear();
+        match &self.bdf {
+            Integrator::Elements(b) => {
+                let y = b.interpolate(t)?;
+                let dy = self.elements_system().rhs(t, &y);
+                let n = y.len() / 2;
+                out.extend_from_slice(y.as_slice());
+                out.extend_from_slice(&dy.as_slice()[n..]);
+            }
+            _ => {
+                let k = self.kinematics_at(t)?;
+                out.extend_from_slice(&[k.v1, k.theta1, k.dv1, k.dtheta1, k.ddv1, k.ddtheta1]);
+            }
+        }
+        Ok(())
+    }
+
     /// The coordinates q at `t` inside the last step (dense output) into `out`: every node's
     /// (v_k, ϑ_k), k = 1..n, the tip last ([`BeamN::nodal_shape`]); (v1, ϑ1) for the paper's
     /// model.

@@ -238,6 +238,11 @@ fn corrupt_serialized_states_are_refused() {
     refuse(&resealed(state_at, &u64::MAX.to_le_bytes()), &["`state`"], "state huge");
     refuse(&resealed(state_at, &6u64.to_le_bytes()), &["`state`"], "state fatal");
     refuse(&resealed(state_at, &7u64.to_le_bytes()), &["`state`"], "state 7");
+    // FMI 3.0's intermediate update and configuration mode (9, 10), which FMI 2.0 has not.
+    refuse(&resealed(state_at, &9u64.to_le_bytes()), &["`state`"], "state intermediate update");
+    refuse(&resealed(state_at, &10u64.to_le_bytes()), &["`state`"], "state configuration");
+    let version_at = field_at("version");
+    refuse(&resealed(version_at, &2u64.to_le_bytes()), &["`version`"], "FMI version 2");
     // `instantiated` with an integrator contradicts itself.
     refuse(&resealed(state_at, &0u64.to_le_bytes()), &["`run`"], "state instantiated");
 

@@ -85,11 +85,28 @@ fn n_elements_is_structural_and_sizes_the_nodal_shape() {
     assert_eq!(all[..4], v[..]);
     assert_eq!(all[4..8], theta[..]);
     assert_eq!(all[8], v[3]);
+    // The call's trace names each array with its elements.
+    h.take();
+    h.ok(unsafe { fmi3SetDebugLogging(h.c, fmi3True, 0, null()) });
+    h.ok(unsafe { fmi3GetFloat64(h.c, vrs.as_ptr(), 3, all.as_mut_ptr(), 9) });
+    h.ok(unsafe { fmi3SetDebugLogging(h.c, fmi3False, 0, null()) });
+    let traced = format!("`nodal_v` (60) = [{:?}, {:?}, {:?}, {:?}]", v[0], v[1], v[2], v[3]);
+    let log = h.take();
+    assert!(
+        log.iter()
+            .any(|(_, _, m)| m.contains(&traced) && m.contains(&format!("`v1` (20) = {:?}", v[3]))),
+        "{log:#?}"
+    );
     let s = unsafe { fmi3GetFloat64(h.c, vrs.as_ptr(), 3, all.as_mut_ptr(), 8) };
     h.expect_error(s, &["nValues = 8", "name 9 values", "`nodal_v` has 4"]);
-    // Model Exchange's states are not co-simulation's.
-    let s = h.get_array(Var::Q, 8).0;
-    h.expect_error(s, &["`q`", "state of Model Exchange", "nodal_v"]);
+    // Co-simulation gives Model Exchange's states too: q is the nodal shape (the quadratic
+    // beam's coordinates), a node's (v_k, θ_k) a row, and dq's last row the tip's rates.
+    let q = h.array(Var::Q, 8);
+    let interleaved: Vec<f64> = v.iter().zip(&theta).flat_map(|(a, b)| [*a, *b]).collect();
+    assert_eq!(q, interleaved);
+    let dq = h.array(Var::Dq, 8);
+    assert_eq!([dq[6], dq[7]], [h.real(Var::Dv1), h.real(Var::Dtheta1)]);
+    assert!(h.array(Var::Ddq, 8).iter().all(|x| x.is_finite() && *x != 0.0));
     // No reconfiguration: the structural parameter is fixed.
     let s = unsafe { fmi3EnterConfigurationMode(h.c) };
     h.expect_error(s, &["fmi3EnterConfigurationMode", "step mode", "no reconfiguration mode"]);
@@ -104,6 +121,24 @@ fn n_elements_is_structural_and_sizes_the_nodal_shape() {
     assert_eq!(unsafe { f2::fmi2GetReal(b, &vr(Var::NodalV), 1, &mut y) }, ERROR);
     unsafe { f2::fmi2FreeInstance(b) };
     h.steps(t, 0.01, 1);
+}
+
+/// A DAE formulation has more states than q and dq (u2), yet gives them in co-simulation, from
+/// the start state on: (v1, ϑ1), their rates and accelerations.
+#[test]
+fn a_dae_gives_q_and_dq() {
+    let h = Host::cs("dae arrays");
+    h.ok(h.set_enum(Var::PhiSource, 2));
+    h.ok(h.set_enum(Var::Formulation, 2));
+    h.ok(h.set_real(Var::V10, 0.01));
+    h.ok(h.enter(None));
+    assert_eq!(h.array(Var::Q, 2), [0.01, 0.0]);
+    h.ok(h.exit());
+    h.steps(0.0, 0.01, 20);
+    let (q, dq, ddq) = (h.array(Var::Q, 2), h.array(Var::Dq, 2), h.array(Var::Ddq, 2));
+    assert_eq!(q, [h.real(Var::V1), h.real(Var::Theta1)]);
+    assert_eq!(dq, [h.real(Var::Dv1), h.real(Var::Dtheta1)]);
+    assert!(ddq.iter().all(|x| x.is_finite() && *x != 0.0), "{ddq:?}");
 }
 
 /// Model Exchange of the beam in 3 elements: 12 states, q and dq as arrays in the order of
@@ -223,4 +258,47 @@ fn model_exchange_runs_the_beam_in_elements() {
         )
     };
     a.expect_error(s, &["fmi3GetDirectionalDerivative", "1 seeds", "an array state counts 6"]);
+}
+
+/// FMU states in configuration mode (FMI 3.0's super state "FMU State Setable" holds every
+/// state): one saved there restores the structural parameter and the mode. A state saved by
+/// an FMI 2.0 instance of the same library is refused by an FMI 3.0 one, naming the versions.
+#[test]
+fn fmu_states_hold_configuration_mode_and_their_version() {
+    use std::ptr::null_mut;
+    let h = Host::cs("configured state");
+    h.ok(unsafe { fmi3EnterConfigurationMode(h.c) });
+    h.ok(h.set_elements(4));
+    let mut s = null_mut();
+    h.ok(unsafe { fmi3GetFMUState(h.c, &mut s) });
+    h.ok(unsafe { fmi3Reset(h.c) });
+    h.ok(unsafe { fmi3SetFMUState(h.c, s) });
+    h.ok(h.set_elements(3)); // still in configuration mode
+    h.ok(unsafe { fmi3SetFMUState(h.c, s) });
+    h.ok(unsafe { fmi3ExitConfigurationMode(h.c) });
+    h.ok(h.enter(None));
+    let mut n = 0u64;
+    h.ok(unsafe { fmi3GetUInt64(h.c, &vr(Var::NElements), 1, &mut n, 1) });
+    assert_eq!(n, 4);
+    h.ok(unsafe { fmi3FreeFMUState(h.c, &mut s) });
+
+    use beam_body::fmi2::exports as f2;
+    let functions = super::common::callbacks(null_mut());
+    let name = std::ffi::CString::new("fmi2").unwrap();
+    let b = unsafe {
+        f2::fmi2Instantiate(name.as_ptr(), 1, super::token().as_ptr(), null(), &*functions, 0, 0)
+    };
+    let (mut s2, mut size) = (null_mut(), 0usize);
+    assert_eq!(unsafe { f2::fmi2GetFMUstate(b, &mut s2) }, 0);
+    assert_eq!(unsafe { f2::fmi2SerializedFMUstateSize(b, s2, &mut size) }, 0);
+    let mut bytes = vec![0u8; size];
+    assert_eq!(unsafe { f2::fmi2SerializeFMUstate(b, s2, bytes.as_mut_ptr().cast(), size) }, 0);
+    unsafe { f2::fmi2FreeFMUstate(b, &mut s2) };
+    unsafe { f2::fmi2FreeInstance(b) };
+    let c = Host::cs("fmi3 instance");
+    let mut r = null_mut();
+    c.ok(unsafe { fmi3DeserializeFMUState(c.c, bytes.as_ptr(), size, &mut r) });
+    let st = unsafe { fmi3SetFMUState(c.c, r) };
+    c.expect_error(st, &["fmi3SetFMUState", "other FMI version", "Fmi2"]);
+    c.ok(unsafe { fmi3FreeFMUState(c.c, &mut r) });
 }

@@ -561,6 +561,16 @@ fn enumerations_are_int64_and_values_are_counted() {
     let mut y = [0.0; 2];
     let s = unsafe { fmi3GetFloat64(h.c, &vr(Var::L), 1, y.as_mut_ptr(), 2) };
     h.expect_error(s, &["fmi3GetFloat64", "1 value references but 2 values"]);
+    // Every type counts nValues: Boolean's too, also with NULL values and nValues = 0.
+    let vrs = [vr(Var::StabilityGuard); 2];
+    let mut flags = [fmi3False; 2];
+    let s = unsafe { fmi3GetBoolean(h.c, vrs.as_ptr(), 2, flags.as_mut_ptr(), 1) };
+    h.expect_error(s, &["fmi3GetBoolean", "2 value references but 1 values"]);
+    let s = unsafe { fmi3GetBoolean(h.c, vrs.as_ptr(), 2, std::ptr::null_mut(), 0) };
+    h.expect_error(s, &["fmi3GetBoolean", "2 value references but 0 values"]);
+    let s = unsafe { fmi3SetBoolean(h.c, vrs.as_ptr(), 2, flags.as_ptr(), 1) };
+    h.expect_error(s, &["fmi3SetBoolean", "2 value references but 1 values"]);
+    h.ok(unsafe { fmi3GetBoolean(h.c, vrs.as_ptr(), 2, flags.as_mut_ptr(), 2) });
     // More value references than values: each slice has its own count, and the types
     // without variables refuse the first value reference.
     let (vrs, mut sizes, mut bins) = ([vr(Var::L); 3], [0usize; 1], [null(); 1]);

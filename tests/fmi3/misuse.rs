@@ -168,7 +168,7 @@ fn calls() -> Vec<Call> {
             s
         }),
         ("fmi3ExitConfigurationMode", &[], |h| unsafe { fmi3ExitConfigurationMode(h.c) }),
-        // The structural parameter: in configuration mode only (tested there in main.rs).
+        // The structural parameter: in configuration mode only (tested there in arrays.rs).
         ("fmi3SetUInt64", &[], |h| unsafe { fmi3SetUInt64(h.c, &vr(Var::NElements), 1, &2, 1) }),
         ("fmi3Terminate", &[StepMode, StepDiscarded, Event, Continuous], |h| unsafe {
             fmi3Terminate(h.c)

@@ -82,8 +82,11 @@ def test_structural_parameter_only_in_configuration_mode(fmu3_dir, md3):
         s.fmu.exitConfigurationMode()
     finally:
         s.free()
+    messages = []
     with pytest.raises(Exception):
-        fmpy.simulate_fmu(str(fmu3_dir), start_values={"n_elements": 4}, stop_time=0.01)
+        fmpy.simulate_fmu(str(fmu3_dir), start_values={"n_elements": 4}, stop_time=0.01,
+                          logger=lambda *args: messages.append(args[-1]))
+    assert any(b"structural parameter" in m and b"configuration mode" in m for m in messages), messages
 
 
 def test_co_simulation_in_elements_gives_the_clis_nodal_shape(fmu3_dir, md3, beam_body, fmu_report):
