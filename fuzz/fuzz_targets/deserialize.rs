@@ -7,8 +7,8 @@
 //! checks of every field; even, the rest is passed as it is, which tests the frame.
 #![no_main]
 
-use beam_body::fmi::{State, Status, STATUS_LAST_SUCCESSFUL_TIME};
-use beam_body_fuzz::{check_outputs, check_status, instance, instance_of, reseal};
+use beam_body::fmi::{State, Status, Version, STATUS_LAST_SUCCESSFUL_TIME};
+use beam_body_fuzz::{check_outputs, check_status, instance, instance3, instance_of, reseal};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|input: &[u8]| {
@@ -42,15 +42,19 @@ fuzz_target!(|input: &[u8]| {
             show(&again)
         );
     }
-    // A state restores into an instance of its own interface.
-    let (mut inst, records) = instance_of(core.interface(), false);
+    // A state restores into an instance of its own interface and FMI version.
+    let (mut inst, records) = match core.version() {
+        Version::Fmi2 => instance_of(core.interface(), false),
+        Version::Fmi3 => instance3(core.interface()),
+    };
     assert_eq!(inst.set_state(&core), Status::Ok);
     check_outputs(&mut inst, &records);
     // Model Exchange: the derivatives are finite or refused with a reason, and a completed
     // step ends cleanly.
     if inst.state() == State::ContinuousTimeMode {
         let before = records.borrow().len();
-        let mut dx = [0.0; 4];
+        // FMI 2.0's four states, or FMI 3.0's 4·n_elements.
+        let mut dx = vec![0.0; inst.number_of_continuous_states().unwrap_or(4)];
         let status = inst.get_derivatives(&mut dx);
         check_status("fmi2GetDerivatives", status, &records, before);
         if status == Status::Ok {

@@ -53,6 +53,11 @@ impl<M> Snapshot<M> {
     pub fn state(&self) -> State {
         self.state
     }
+
+    /// The FMI version of the instance that made it: it restores only into that version's.
+    pub fn version(&self) -> Version {
+        self.version
+    }
 }
 
 impl<M: Model> Snapshot<M> {

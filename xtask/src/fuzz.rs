@@ -159,7 +159,10 @@ fn run_target(bin: &Path, target: &'static str, seconds: u64) -> Result<Outcome>
         cmd.arg(&regressions);
     }
     cmd.arg(format!("-max_total_time={seconds}"))
-        .arg("-timeout=10")
+        // A DoStep may take MAX_STEPS_PER_DO_STEP (10⁶) integrator steps before it gives up:
+        // about a second in a release build, 14 s in this instrumented one (an api_sequence
+        // input found on 2026-12-05). Such an input is a bounded step, not a hang.
+        .arg("-timeout=30")
         .arg("-rss_limit_mb=2048")
         .arg("-max_len=8192")
         .arg("-print_final_stats=1")
