@@ -56,20 +56,25 @@ fuzz_target!(|input: &[u8]| {
         // FMI 2.0's four states, or FMI 3.0's 4·n_elements.
         let mut dx = vec![0.0; inst.number_of_continuous_states().unwrap_or(4)];
         let status = inst.get_derivatives(&mut dx);
-        check_status("fmi2GetDerivatives", status, &records, before);
+        let name = match inst.api() {
+            "fmi3" => "fmi3GetContinuousStateDerivatives",
+            _ => "fmi2GetDerivatives",
+        };
+        check_status(name, status, &records, before);
         if status == Status::Ok {
             assert!(dx.iter().all(|x| x.is_finite()), "non-finite derivatives {dx:?}");
         }
         let before = records.borrow().len();
         let status = inst.completed_integrator_step().err().unwrap_or(Status::Ok);
-        check_status("fmi2CompletedIntegratorStep", status, &records, before);
+        let name = format!("{}CompletedIntegratorStep", inst.api());
+        check_status(&name, status, &records, before);
     }
     // Step on from the restored state: whatever it holds, the step must end cleanly.
     if inst.state() == State::StepComplete {
         let tc = inst.get_real_status(STATUS_LAST_SUCCESSFUL_TIME).expect("allowed");
         let before = records.borrow().len();
         let status = inst.do_step(tc, 0.01);
-        check_status("fmi2DoStep", status, &records, before);
+        check_status(&format!("{}DoStep", inst.api()), status, &records, before);
         check_outputs(&mut inst, &records);
     }
 });
