@@ -191,10 +191,19 @@ def fmu_unzipdir(fmu_file, tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def fmu3_unzipdir(fmu3_file, tmp_path_factory) -> Path:
-    """The FMI 3.0 FMU extracted once per session (for the C host's --fmi3 checks)."""
+    """The FMI 3.0 FMU extracted once per session (for FMPy's FMU3Slave, FMU3Model and simulate_fmu, and the C
+    host's --fmi3 checks)."""
     import fmpy
 
     return Path(fmpy.extract(str(fmu3_file), unzipdir=str(tmp_path_factory.mktemp("BeamBody_fmi3_fmu"))))
+
+
+@pytest.fixture(scope="session")
+def md3(fmu3_file):
+    """The FMI 3.0 FMU's model description as FMPy reads it (not validated: its own tests validate)."""
+    from fmpy import read_model_description
+
+    return read_model_description(str(fmu3_file), validate=False)
 
 
 @pytest.fixture(scope="session")

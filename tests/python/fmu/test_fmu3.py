@@ -49,7 +49,6 @@ from __future__ import annotations
 import fmpy
 import numpy as np
 import pytest
-from fmpy import read_model_description
 
 from fmu_util import (H0, OUTPUTS, PHI_SOURCE_LAW, STATES, T_END, Slave, Slave3, cli, cli_law, comm_grid, law,
                       run_derivatives)
@@ -75,17 +74,6 @@ B_MAX = 2 * 6.3e-7  # (b)'s error in v1, 2x the largest measured
 # --------------------------------------------------------------------------------------------------
 # runs, memoised per session
 # --------------------------------------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def fmu3_dir(fmu3_file, tmp_path_factory):
-    """The FMI 3.0 archive extracted (for FMU3Slave and simulate_fmu)."""
-    return fmpy.extract(str(fmu3_file), unzipdir=str(tmp_path_factory.mktemp("BeamBody_fmu3")))
-
-
-@pytest.fixture(scope="module")
-def md3(fmu3_file):
-    return read_model_description(str(fmu3_file), validate=False)
 
 
 _RUNS: dict = {}
@@ -178,10 +166,10 @@ def err(rows, ref, q):
 
 
 @pytest.mark.parametrize("rtol", RTOL_LAW)
-def test_co_simulation_is_fmi2s_bit_for_bit_and_the_clis(fmu3_dir, fmu_unzipdir, beam_body, fmu_report, rtol):
+def test_co_simulation_is_fmi2s_bit_for_bit_and_the_clis(fmu3_unzipdir, fmu_unzipdir, beam_body, fmu_report, rtol):
     """simulate_fmu(CoSimulation) with the law on the FMI 3.0 and the FMI 2.0 archive: the same bits in
     every output; and the CLI's run at the same rtol to the rounding of the output times."""
-    r3 = simulate(fmu3_dir, "CoSimulation", rtol, 3)
+    r3 = simulate(fmu3_unzipdir, "CoSimulation", rtol, 3)
     r2 = simulate(fmu_unzipdir, "CoSimulation", rtol, 2)
     c = cli(beam_body, rtol=rtol)
     assert len(r3) == len(c["t"]) == 1201 and np.max(np.abs(r3["time"] - c["t"])) <= 1e-12
@@ -196,11 +184,11 @@ def test_co_simulation_is_fmi2s_bit_for_bit_and_the_clis(fmu3_dir, fmu_unzipdir,
         assert d <= SAME_STEPS * np.max(np.abs(c[q])), f"{q}: |FMI 3.0 CS - CLI| = {d:.3e}"
 
 
-def test_model_exchange_matches_the_cli_and_fmi2(fmu3_dir, fmu_unzipdir, beam_body, fmu_report):
+def test_model_exchange_matches_the_cli_and_fmi2(fmu3_unzipdir, fmu_unzipdir, beam_body, fmu_report):
     """simulate_fmu(ModelExchange), FMPy's CVode at rtol 1e-10, with the law: within 2x of the measured
     distance to the CLI at rtol 1e-11, and FMI 2.0's ME run the same way to round-off (measured: the
     same bits)."""
-    r3 = simulate(fmu3_dir, "ModelExchange", ME_RTOL, 3)
+    r3 = simulate(fmu3_unzipdir, "ModelExchange", ME_RTOL, 3)
     r2 = simulate(fmu_unzipdir, "ModelExchange", ME_RTOL, 2)
     ref = cli(beam_body, **ME_REF)
     assert abs(r3["time"][-1] - T_END) < 1e-9, "the run ended early"
@@ -221,11 +209,11 @@ def test_model_exchange_matches_the_cli_and_fmi2(fmu3_dir, fmu_unzipdir, beam_bo
 
 
 @pytest.mark.parametrize("h", HS)
-def test_values_only_is_the_clis_same_feed(fmu3_dir, md3, beam_body, fmu_report, h):
+def test_values_only_is_the_clis_same_feed(fmu3_unzipdir, md3, beam_body, fmu_report, h):
     """(a) FMU3Slave, setFloat64(phi) and doStep(tc, h) at every communication point, no callback:
     the CLI fed the same samples (phi_source = input, dt_comm = h) to rounding, as FMI 2.0's
     values-only feed is (test_fmu_input.py)."""
-    rows = on_paper_grid(run_input(fmu3_dir, md3, beam_body, h, False)["y"], h)
+    rows = on_paper_grid(run_input(fmu3_unzipdir, md3, beam_body, h, False)["y"], h)
     c = cli(beam_body, rtol=LADDER_RTOL, phi_source="input", dt_comm=h)
     d = max(err(rows, c, q) for q in STATES)
     fmu_report.figure(f"fmi3 values H={h:g}", "max|FMU3-CLI(values)|", d)
@@ -233,12 +221,12 @@ def test_values_only_is_the_clis_same_feed(fmu3_dir, md3, beam_body, fmu_report,
 
 
 @pytest.mark.parametrize("h", HS)
-def test_intermediate_update_calls_back_every_intermediate_step(fmu3_dir, md3, beam_body, fmu_report, h):
+def test_intermediate_update_calls_back_every_intermediate_step(fmu3_unzipdir, md3, beam_body, fmu_report, h):
     """(b) The callbacks: at exactly the times of the FMU's rule (every 1 ms inside a step, the last part
     up to 1.25 ms), with intermediateVariableSetRequested, intermediateVariableGetAllowed and
     intermediateStepFinished true and canReturnEarly false; in each, fmi3GetFloat64(time) is the
     callback's time and fmi3SetFloat64(phi) is accepted (no message of warning or worse)."""
-    run = run_input(fmu3_dir, md3, beam_body, h, True)
+    run = run_input(fmu3_unzipdir, md3, beam_body, h, True)
     expected = predicted_callbacks([(a, b - a) for a, b in zip(run["times"][:-1], run["times"][1:])])
     fmu_report.figure(f"fmi3 intermediate update H={h:g}", "callbacks", len(run["calls"]),
                       f"{len(run['calls']) / (len(run['times']) - 1):.2f} a step")
@@ -254,15 +242,15 @@ def test_intermediate_update_calls_back_every_intermediate_step(fmu3_dir, md3, b
         assert h <= 1.25 * INTERMEDIATE_STEP, f"h = {h}: no callback"
 
 
-def test_intermediate_update_beats_values_only(fmu3_dir, md3, beam_body, fmu_report):
+def test_intermediate_update_beats_values_only(fmu3_unzipdir, md3, beam_body, fmu_report):
     """(a) vs (b) against the exact law (module docstring's table): (b) better by MIN_GAIN at the coarse
     steps, (b)'s error flat in h and small; at h = 1.0625 ms, below 1.25 intermediate_step, (b) has no
     callback and is (a) bit for bit."""
     ref = cli(beam_body, rtol=REF_RTOL)
     e = {}
     for h in HS:
-        a = on_paper_grid(run_input(fmu3_dir, md3, beam_body, h, False)["y"], h)
-        b = on_paper_grid(run_input(fmu3_dir, md3, beam_body, h, True)["y"], h)
+        a = on_paper_grid(run_input(fmu3_unzipdir, md3, beam_body, h, False)["y"], h)
+        b = on_paper_grid(run_input(fmu3_unzipdir, md3, beam_body, h, True)["y"], h)
         e[h] = {(k, q): err(rows, ref, q) for k, rows in (("a", a), ("b", b)) for q in STATES}
         for q in ("v1", "theta1"):
             fmu_report.figure(f"fmi3 input H={h:g}", f"err_vs_law_{q}", e[h][("b", q)],
@@ -277,14 +265,14 @@ def test_intermediate_update_beats_values_only(fmu3_dir, md3, beam_body, fmu_rep
         failures.append(f"(b)'s error depends on h: {b}")
     if max(b) > B_MAX:
         failures.append(f"(b)'s error {max(b):.3e} > {B_MAX:.3e}")
-    fine_a = run_input(fmu3_dir, md3, beam_body, HS[-1], False)["y"]
-    fine_b = run_input(fmu3_dir, md3, beam_body, HS[-1], True)["y"]
+    fine_a = run_input(fmu3_unzipdir, md3, beam_body, HS[-1], False)["y"]
+    fine_b = run_input(fmu3_unzipdir, md3, beam_body, HS[-1], True)["y"]
     if not np.array_equal(fine_a, fine_b):
         failures.append(f"h = {HS[-1]}: (b) without callbacks differs from (a)")
     assert not failures, "\n".join(failures)
 
 
-def test_callback_rules(fmu3_dir, md3, fmu_report):
+def test_callback_rules(fmu3_unzipdir, md3, fmu_report):
     """An output in requiredIntermediateVariables is refused at instantiation (only phi is marked
     intermediateUpdate). No callback when phi is not in requiredIntermediateVariables, when intermediate_step = 0, or when
     phi comes from the law (phi_source = 2): the run is then the one without a callback, bit for bit.
@@ -299,7 +287,7 @@ def test_callback_rules(fmu3_dir, md3, fmu_report):
         current["slave"].fmu.setFloat64([current["slave"].vr["phi"]], [law(t)[0]])
 
     def run(name, int64=None, reals=None, **kw):
-        s = current["slave"] = Slave3(fmu3_dir, md3, name=name, **kw)
+        s = current["slave"] = Slave3(fmu3_unzipdir, md3, name=name, **kw)
         by_law = bool(int64)
         try:
             s.start(tolerance=1e-8, stop_time=T_END, int64=int64, reals=reals, phi0=None if by_law else 0.0)
@@ -317,7 +305,7 @@ def test_callback_rules(fmu3_dir, md3, fmu_report):
     assert not calls and np.array_equal(unlisted, plain), f"{len(calls)} callbacks without phi listed"
     # Only variables marked intermediateUpdate may be listed (FMI 3.0): an output is refused.
     with pytest.raises(Exception, match="Failed to instantiate FMU"):
-        Slave3(fmu3_dir, md3, name="v1 listed", intermediate_update=callback, required=("v1",))
+        Slave3(fmu3_unzipdir, md3, name="v1 listed", intermediate_update=callback, required=("v1",))
     never = run("intermediate_step=0", reals={"intermediate_step": 0.0}, intermediate_update=callback,
                 required=("phi",))
     assert not calls and np.array_equal(never, plain), f"{len(calls)} callbacks with intermediate_step = 0"
@@ -335,7 +323,7 @@ def test_callback_rules(fmu3_dir, md3, fmu_report):
     messages = []
     from fmpy.fmi3 import FMU3Slave
 
-    fmu = FMU3Slave(guid=md3.guid, unzipDirectory=fmu3_dir, modelIdentifier="BeamBody", instanceName="event-mode")
+    fmu = FMU3Slave(guid=md3.guid, unzipDirectory=fmu3_unzipdir, modelIdentifier="BeamBody", instanceName="event-mode")
     with pytest.raises(Exception, match="Failed to instantiate FMU"):
         fmu.instantiate(eventModeUsed=True, logMessage=lambda _e, st, _c, m: messages.append((st, m.decode())))
     fmu_report.note("fmi3", f"eventModeUsed = true: {messages}")
@@ -347,7 +335,7 @@ def test_callback_rules(fmu3_dir, md3, fmu_report):
 # --------------------------------------------------------------------------------------------------
 
 
-def test_accuracy_of_each_interface(fmu3_dir, fmu_unzipdir, fmu_model_description, md3, beam_body, fmu_report):
+def test_accuracy_of_each_interface(fmu3_unzipdir, fmu_unzipdir, fmu_model_description, md3, beam_body, fmu_report):
     """One line per interface of the FMI 3.0 archive, on the paper's scene: max |v1 - the CLI's| over the
     1201 points k*8.5 ms, for the closing note (target/fmu-report.txt, test `fmi3 accuracy`). With the
     law against the CLI at the same rtol; with phi as an input against the law (the CLI at 1e-12). The
@@ -367,16 +355,16 @@ def test_accuracy_of_each_interface(fmu3_dir, fmu_unzipdir, fmu_model_descriptio
         s2.free()
     rows.append(("FMI 2.0 co-simulation, input with derivatives, h = 8.5 ms, rtol 1e-10 (vs the law)",
                  err(y2, ref, "v1")))
-    cs = simulate(fmu3_dir, "CoSimulation", 1e-9, 3)
+    cs = simulate(fmu3_unzipdir, "CoSimulation", 1e-9, 3)
     rows.append(("co-simulation, law, rtol 1e-9 (vs CLI at 1e-9)",
                  float(np.max(np.abs(cs["v1"] - cli(beam_body, rtol=1e-9)["v1"])))))
-    me = simulate(fmu3_dir, "ModelExchange", ME_RTOL, 3)
+    me = simulate(fmu3_unzipdir, "ModelExchange", ME_RTOL, 3)
     me_ref = cli(beam_body, **ME_REF)
     rows.append(("model exchange, law, FMPy CVode rtol 1e-10 (vs CLI at 1e-11)",
                  float(np.max(np.abs(np.interp(me_ref["t"], me["time"], me["v1"]) - me_ref["v1"])))))
     for h in (HS[0], HS[-1]):
         for intermediate, what in ((False, "values only"), (True, "intermediate update")):
-            y = on_paper_grid(run_input(fmu3_dir, md3, beam_body, h, intermediate)["y"], h)
+            y = on_paper_grid(run_input(fmu3_unzipdir, md3, beam_body, h, intermediate)["y"], h)
             rows.append((f"co-simulation, input, {what}, h = {h * 1e3:g} ms, rtol 1e-10 (vs the law)",
                          err(y, ref, "v1")))
     for what, value in rows:

@@ -19,7 +19,6 @@ from __future__ import annotations
 import fmpy
 import numpy as np
 import pytest
-from fmpy import read_model_description
 
 from fmu_util import H0, PHI_SOURCE_LAW, Slave3, cli
 
@@ -30,16 +29,6 @@ CS_SAME = 1e-12  # |FMI 3.0 CS - CLI| / max|y|: the same run
 ME_RTOL = 1e-10
 ME_REF = dict(rtol=1e-11, atol=1e-13)
 ME_N_MEASURED = {"v": 6.6e-10, "theta": 1.1e-8}  # |FMPy CVode ME - CLI| in the nodal shape (m, rad)
-
-
-@pytest.fixture(scope="module")
-def fmu3_dir(fmu3_file, tmp_path_factory):
-    return fmpy.extract(str(fmu3_file), unzipdir=str(tmp_path_factory.mktemp("BeamBody_fmu3_arrays")))
-
-
-@pytest.fixture(scope="module")
-def md3(fmu3_file):
-    return read_model_description(str(fmu3_file), validate=False)
 
 
 def vrs(md):
@@ -65,11 +54,11 @@ def cli_shape(beam_body, n, **sets):
     return c["t"], v, theta
 
 
-def test_structural_parameter_only_in_configuration_mode(fmu3_dir, md3):
+def test_structural_parameter_only_in_configuration_mode(fmu3_unzipdir, md3):
     """fmi3SetUInt64 of n_elements outside configuration mode is refused naming it; inside, other variables
     are; FMPy's simulate_fmu, which sets start values in the instantiated state, cannot change it."""
     vr = vrs(md3)
-    s = Slave3(fmu3_dir, md3, name="structural")
+    s = Slave3(fmu3_unzipdir, md3, name="structural")
     try:
         with pytest.raises(Exception):
             s.fmu.setUInt64([vr["n_elements"]], [4])
@@ -84,15 +73,15 @@ def test_structural_parameter_only_in_configuration_mode(fmu3_dir, md3):
         s.free()
     messages = []
     with pytest.raises(Exception):
-        fmpy.simulate_fmu(str(fmu3_dir), start_values={"n_elements": 4}, stop_time=0.01,
+        fmpy.simulate_fmu(str(fmu3_unzipdir), start_values={"n_elements": 4}, stop_time=0.01,
                           logger=lambda *args: messages.append(args[-1]))
     assert any(b"structural parameter" in m and b"configuration mode" in m for m in messages), messages
 
 
-def test_co_simulation_in_elements_gives_the_clis_nodal_shape(fmu3_dir, md3, beam_body, fmu_report):
+def test_co_simulation_in_elements_gives_the_clis_nodal_shape(fmu3_unzipdir, md3, beam_body, fmu_report):
     vr = vrs(md3)
     t_ref, v_ref, theta_ref = cli_shape(beam_body, N_CS)
-    s = Slave3(fmu3_dir, md3, name="cs in elements")
+    s = Slave3(fmu3_unzipdir, md3, name="cs in elements")
     try:
         configure(s.fmu, vr, N_CS)
         s.start(tolerance=1e-6, int64={"phi_source": PHI_SOURCE_LAW})
@@ -132,14 +121,14 @@ class _NoInput:
         pass
 
 
-def test_model_exchange_in_elements_with_fmpy_cvode(fmu3_dir, md3, beam_body, fmu_report):
+def test_model_exchange_in_elements_with_fmpy_cvode(fmu3_unzipdir, md3, beam_body, fmu_report):
     """FMU3Model configured for N_ME elements, integrated by FMPy's CVode as simulate_fmu builds it, with the
     time event at t_rot: the nodal shape against the CLI in as many elements."""
     from fmpy.fmi3 import FMU3Model
     from fmpy.sundials import CVodeSolver
 
     vr = vrs(md3)
-    fmu = FMU3Model(guid=md3.guid, unzipDirectory=str(fmu3_dir),
+    fmu = FMU3Model(guid=md3.guid, unzipDirectory=str(fmu3_unzipdir),
                     modelIdentifier=md3.modelExchange.modelIdentifier, instanceName="me in elements")
     fmu.instantiate()
     try:

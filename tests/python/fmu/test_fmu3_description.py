@@ -13,7 +13,6 @@ import zipfile
 
 import fmpy.validation
 import pytest
-from fmpy import read_model_description
 
 from fmu_util import MODEL_DESCRIPTION3_XML
 
@@ -28,11 +27,6 @@ ONLY2 = ["der(v1)", "der(theta1)", "der(dv1)", "der(dtheta1)"]
 INDICATORS = ["range_margin_v1", "range_margin_theta1"]
 #: FMI 2.0's element of each type, in FMI 3.0.
 TYPES = {"Real": "Float64", "Integer": "Int32", "Enumeration": "Enumeration", "Boolean": "Boolean"}
-
-
-@pytest.fixture(scope="module")
-def md3(fmu3_file):
-    return read_model_description(str(fmu3_file), validate=False)
 
 
 @pytest.fixture(scope="module")
