@@ -216,21 +216,8 @@ fn model_exchange_runs_the_beam_in_elements() {
 
     // d ddq / d q along a seed, against a central difference of the derivatives.
     let seed: [f64; 2 * N] = std::array::from_fn(|i| 0.1 * (i as f64 + 1.0));
-    let (u, k) = ([vr(Var::Ddq)], [vr(Var::Q)]);
-    let mut out = [f64::NAN; 2 * N];
-    a.ok(unsafe {
-        fmi3GetDirectionalDerivative(
-            a.c,
-            u.as_ptr(),
-            1,
-            k.as_ptr(),
-            1,
-            seed.as_ptr(),
-            2 * N,
-            out.as_mut_ptr(),
-            2 * N,
-        )
-    });
+    let (status, out) = a.directional(&[Var::Ddq], &[Var::Q], &seed, 2 * N);
+    a.ok(status);
     let e = 1e-6;
     let mut xp = x;
     let mut xm = x;
@@ -244,19 +231,7 @@ fn model_exchange_runs_the_beam_in_elements() {
         let fd = (dp[2 * N + i] - dm[2 * N + i]) / (2.0 * e);
         assert!((out[i] - fd).abs() < 1e-5 * scale, "{i}: {out:?} against {fd}");
     }
-    let s = unsafe {
-        fmi3GetDirectionalDerivative(
-            a.c,
-            u.as_ptr(),
-            1,
-            k.as_ptr(),
-            1,
-            seed.as_ptr(),
-            1,
-            out.as_mut_ptr(),
-            2 * N,
-        )
-    };
+    let s = a.directional(&[Var::Ddq], &[Var::Q], &seed[..1], 2 * N).0;
     a.expect_error(s, &["fmi3GetDirectionalDerivative", "1 seeds", "an array state counts 6"]);
 }
 

@@ -214,6 +214,34 @@ impl Host {
         y[0]
     }
 
+    /// fmi3GetDirectionalDerivative of `unknowns` along `seed` in `knowns`, into `n` values
+    /// (each array counts all its elements).
+    pub fn directional(
+        &self,
+        unknowns: &[Var],
+        knowns: &[Var],
+        seed: &[f64],
+        n: usize,
+    ) -> (fmi3Status, Vec<f64>) {
+        let (u, k): (Vec<u32>, Vec<u32>) =
+            (unknowns.iter().map(|v| vr(*v)).collect(), knowns.iter().map(|v| vr(*v)).collect());
+        let mut out = vec![f64::NAN; n];
+        let s = unsafe {
+            fmi3GetDirectionalDerivative(
+                self.c,
+                u.as_ptr(),
+                u.len(),
+                k.as_ptr(),
+                k.len(),
+                seed.as_ptr(),
+                seed.len(),
+                out.as_mut_ptr(),
+                n,
+            )
+        };
+        (s, out)
+    }
+
     pub fn set_enum(&self, var: Var, k: i64) -> fmi3Status {
         unsafe { fmi3SetInt64(self.c, &vr(var), 1, &k, 1) }
     }
@@ -474,21 +502,8 @@ fn model_exchange_gives_fmi2_s_derivatives() {
         assert_eq!((enter, stop), (fmi3False, fmi3False));
     }
     // A directional derivative: d q′ / d dq = 1 along dq's first element (q′ = dq).
-    let (u, k, seed) = ([vr(Var::Dq)], [vr(Var::Dq)], [1.0, 0.0]);
-    let mut out = [f64::NAN; 2];
-    a.ok(unsafe {
-        fmi3GetDirectionalDerivative(
-            a.c,
-            u.as_ptr(),
-            1,
-            k.as_ptr(),
-            1,
-            seed.as_ptr(),
-            2,
-            out.as_mut_ptr(),
-            2,
-        )
-    });
+    let (status, out) = a.directional(&[Var::Dq], &[Var::Dq], &[1.0, 0.0], 2);
+    a.ok(status);
     assert!((out[0] - 1.0).abs() < 1e-8 && out[1].abs() < 1e-8, "{out:?}");
     unsafe { f2::fmi2FreeInstance(b) };
 }

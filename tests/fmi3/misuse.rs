@@ -248,22 +248,7 @@ fn calls() -> Vec<Call> {
         (
             "fmi3GetDirectionalDerivative",
             &[MeInit, Event, Continuous, MeTerminated, MeError],
-            |h| {
-                let (u, k, seed, mut out) = ([vr(Var::Ddq)], [vr(Var::Dq)], [1.0, 0.0], [0.0; 2]);
-                unsafe {
-                    fmi3GetDirectionalDerivative(
-                        h.c,
-                        u.as_ptr(),
-                        1,
-                        k.as_ptr(),
-                        1,
-                        seed.as_ptr(),
-                        2,
-                        out.as_mut_ptr(),
-                        2,
-                    )
-                }
-            },
+            |h| h.directional(&[Var::Ddq], &[Var::Dq], &[1.0, 0.0], 2).0,
         ),
     ]
 }
