@@ -3,11 +3,12 @@
     beam-body-study run STUDY.toml -o results.parquet [--engine dask [--scheduler ADDRESS]]
     beam-body-study plot heatmap results.parquet --x t_rot --y M2 --z residual_v1 -o map.png
     beam-body-study plot hist results.parquet --metric peak_M -o hist.png
+    beam-body-study animate SCENE.toml -o turn.gif [--elements N] [--set NAME=VALUE]
 
 (`python -m beam_body_study` is the same command.) The study file's format is in the README
 (Design studies). The runs are the native runner's, `beam-body study`; this package cuts the
 study into chunks, runs them, keeps the finished ones for a re-run, and writes the table with
-pyarrow.
+pyarrow. `animate` draws one run of a scene, the beam and the body, as a GIF.
 """
 
 # The one place of the version: python/pyproject.toml reads it from here.

@@ -1,5 +1,5 @@
-"""The command line: `beam-body-study run|plot|animate ...` or `python -m beam_body_study run|plot ...`
-(see the package's docstring).
+"""The command line: `beam-body-study run|plot|animate ...` or `python -m beam_body_study
+run|plot|animate ...` (see the package's docstring).
 
 Every error a user can make ends as one line, `error: ...`, with exit status 2; Ctrl-C as one
 line saying what was kept, with exit status 130. A traceback means a bug of this tool.

@@ -19,6 +19,15 @@ from pathlib import Path
 from .errors import StudyError
 
 
+def cli_message(stderr: str, returncode: int) -> str:
+    """What a failed CLI run says, without the CLI's own `error: ` prefix: its last `error:`
+    line, else its last line."""
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    errors = [line for line in lines if line.startswith("error:")]
+    message = (errors or lines or [f"exit status {returncode}"])[-1]
+    return message.removeprefix("error:").strip()
+
+
 def run_shape(cli: str, scene: str, sets: list, elements: int | None, fps: float) -> dict:
     """The CLI's run of `scene` with the nodes' columns, one row a frame: {column: values}."""
     args = [cli, "simulate", scene, "--columns", "shape"]
@@ -30,7 +39,10 @@ def run_shape(cli: str, scene: str, sets: list, elements: int | None, fps: float
     args += ["--set", f"dt_out={1.0 / fps!r}"]
     done = subprocess.run(args, capture_output=True, text=True)
     if done.returncode != 0:
-        raise StudyError(f"the run failed: {done.stderr.strip().splitlines()[-1]}")
+        run = " ".join([scene] + ([f"--elements {elements}"] if elements is not None else [])
+                       + [f"--set {s}" for s in sets])
+        raise StudyError(f"the run of {run} failed: "
+                         f"{cli_message(done.stderr, done.returncode)}")
     reader = csv.reader(io.StringIO(done.stdout))
     header = [h.split(" [")[0] for h in next(reader)]
     rows = [[float(x) for x in r] for r in reader]

@@ -3,16 +3,18 @@ quadrature of the inextensible shortening), and a short GIF end to end."""
 
 from __future__ import annotations
 
+import re
 import sys
 
 import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from conftest import REPO
+from conftest import PAPER_SCENE, REPO
 
 sys.path.insert(0, str(REPO / "python"))
 
+from beam_body_study import __main__ as study_main  # noqa: E402
 from beam_body_study import animate as an  # noqa: E402
 from beam_body_study.__main__ import main  # noqa: E402
 from beam_body_study.errors import StudyError  # noqa: E402
@@ -56,3 +58,24 @@ def test_a_short_animation_is_a_gif_with_a_frame_per_output(beam_body, tmp_path)
 def test_a_name_that_is_not_a_gif_is_refused(beam_body, tmp_path):
     with pytest.raises(StudyError, match=r"\.gif"):
         an.animate(str(beam_body), str(REPO / "scenes" / "paper.toml"), tmp_path / "x.mp4", [])
+
+
+def test_a_failed_run_says_error_once_naming_the_run(beam_body, tmp_path, capsys):
+    """The quadratic beam leaves its range in the turn of 0.2 s: one `error:`, not the CLI's
+    own repeated after the tool's, and the run named."""
+    code = main(["animate", str(PAPER_SCENE), "--set", "t_rot=0.2", "--cli", str(beam_body),
+                 "-o", str(tmp_path / "turn.gif")])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("error:") == 1 and err.startswith("error: the run of "), err
+    assert str(PAPER_SCENE) in err and "t_rot=0.2" in err and "outside the model's range" in err
+    assert an.cli_message("beam-body: ...\nerror: no such file\n", 2) == "no such file"
+    assert an.cli_message("", 101) == "exit status 101"
+
+
+def test_the_usage_lists_animate(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = capsys.readouterr().out
+    assert re.search(r"^ +beam-body-study animate SCENE\.toml -o ", out, re.M), out
+    assert re.search(r"python -m beam_body_study\s+run\|plot\|animate", study_main.__doc__)
