@@ -3,7 +3,7 @@
     beam-body-study run STUDY.toml -o results.parquet [--engine dask [--scheduler ADDRESS]]
     beam-body-study plot heatmap results.parquet --x t_rot --y M2 --z residual_v1 -o map.png
     beam-body-study plot hist results.parquet --metric peak_M -o hist.png
-    beam-body-study animate SCENE.toml -o turn.gif [--elements N] [--set NAME=VALUE]
+    beam-body-study animate SCENE.toml -o turn.gif [--elements N] [--beam exact] [--set NAME=VALUE]
 
 (`python -m beam_body_study` is the same command.) The study file's format is in the README
 (Design studies). The runs are the native runner's, `beam-body study`; this package cuts the

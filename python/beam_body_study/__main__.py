@@ -113,6 +113,8 @@ def parser() -> argparse.ArgumentParser:
     anim.add_argument("scene", help="the scene file (TOML), as `beam-body simulate` reads it")
     anim.add_argument("-o", "--output", required=True, help="the animation (.gif)")
     anim.add_argument("--elements", type=int, help="n_elements (default: the scene's)")
+    anim.add_argument("--beam", choices=("quadratic", "exact"),
+                      help="the beam's theory (default: the scene's)")
     anim.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                       help="a setting on top of the scene (repeatable), as the CLI's --set")
     anim.add_argument("--fps", type=float, default=20.0,
@@ -120,16 +122,24 @@ def parser() -> argparse.ArgumentParser:
     anim.add_argument("--dpi", type=int, default=72, help="resolution (default 72)")
     anim.add_argument("--cli", help="the beam-body binary (default: $BEAM_BODY_BIN, "
                                     "target/release/beam-body, or beam-body on PATH)")
+    shown = anim.add_mutually_exclusive_group()
+    shown.add_argument("--progress", action="store_true",
+                       help="frames drawn on stderr even when it is not a terminal (by default "
+                            "only on a terminal)")
+    shown.add_argument("--quiet", action="store_true", help="nothing on stderr but errors")
     return ap
 
 
 def animate_command(args) -> None:
-    from .animate import animate
+    from .animate import Progress, animate
 
+    shown = not args.quiet and (args.progress or sys.stderr.isatty())
     info = animate(args.cli or default_cli(), args.scene, args.output, args.set,
-                   elements=args.elements, fps=args.fps, dpi=args.dpi)
-    print(f"animate: {info['frames']} frames of {info['elements']} element(s); "
-          f"wrote {args.output}", file=sys.stderr)
+                   elements=args.elements, beam=args.beam, fps=args.fps, dpi=args.dpi,
+                   progress=Progress() if shown else None)
+    if not args.quiet:
+        print(f"animate: {info['frames']} frames of {info['elements']} element(s); "
+              f"wrote {args.output}", file=sys.stderr)
 
 
 def run_command(args) -> None:
