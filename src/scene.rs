@@ -86,6 +86,8 @@ pub struct Scene {
     pub dt_comm: f64,
     pub solver: SolverSettings,
     pub range_check: RangeCheck,
+    /// What a broken energy balance does (`energy_check`: stop, warn, off).
+    pub energy_check: RangeCheck,
     /// End time [s].
     pub t_end: f64,
     /// Output step [s].
@@ -120,6 +122,7 @@ impl Default for Scene {
                 stability_guard: true,
             },
             range_check: RangeCheck::Stop,
+            energy_check: RangeCheck::Stop,
             t_end: 10.0,
             dt_out: 0.01,
             max_rows: 1,
@@ -181,6 +184,7 @@ impl Scene {
             Key::FixedOrder => Integer(s.fixed_order as i64),
             Key::StabilityGuard => Bool(s.stability_guard),
             Key::RangeCheck => Choice(position(&RangeCheck::ALL, &self.range_check)),
+            Key::EnergyCheck => Choice(position(&RangeCheck::ALL, &self.energy_check)),
             Key::TEnd => Real(self.t_end),
             Key::DtOut => Real(self.dt_out),
             Key::MaxRows => Integer(self.max_rows as i64),
@@ -272,11 +276,36 @@ impl Scene {
             Key::FixedOrder => s.fixed_order = int(value) as usize,
             Key::StabilityGuard => s.stability_guard = flag(value),
             Key::RangeCheck => self.range_check = item(&RangeCheck::ALL, choice(value)),
+            Key::EnergyCheck => self.energy_check = item(&RangeCheck::ALL, choice(value)),
             Key::TEnd => self.t_end = real(value),
             Key::DtOut => self.dt_out = real(value),
             Key::MaxRows => self.max_rows = int(value),
             Key::Columns => self.columns = choice(value),
         }
+    }
+
+    /// The run's model in words, for a run's summary: the beam's theory and elements, the
+    /// formulation, the damping and the beam's weight.
+    pub fn describe(&self) -> String {
+        let p = &self.params;
+        let elements = match p.n_elements {
+            1 => "1 element".to_string(),
+            n => format!("{n} elements"),
+        };
+        let paper = if p.is_paper_model() { " (the paper's model)" } else { "" };
+        let damping = if p.damping_ratio > 0.0 {
+            format!("damping_ratio {:?}", p.damping_ratio)
+        } else if p.damping_alpha > 0.0 || p.damping_beta > 0.0 {
+            format!("damping_alpha {:?} 1/s, damping_beta {:?} s", p.damping_alpha, p.damping_beta)
+        } else {
+            "undamped".to_string()
+        };
+        let weight = if p.beam_gravity { ", the beam's weight" } else { "" };
+        format!(
+            "{} beam in {elements}{paper}, {} formulation, {damping}{weight}",
+            p.beam.name(),
+            self.formulation
+        )
     }
 
     /// The integrator's configuration for a run of this scene.

@@ -82,6 +82,18 @@ pub const RANGE_CHECK_TYPE: EnumType = EnumType {
     ],
 };
 
+pub const ENERGY_CHECK_TYPE: EnumType = EnumType {
+    name: "EnergyCheck",
+    description: "What a step does when the energy balance breaks: the energy's change no longer \
+                  matches the work of the drive and of the damping within a bound scaled by the \
+                  tolerance (numerical instability)",
+    items: &[
+        ("stop", "the run ends there with a message (the FMU: Discard)"),
+        ("warn", "a warning, once (the FMU: Warning); the run goes on"),
+        ("off", "no check"),
+    ],
+};
+
 pub const COLUMNS_TYPE: EnumType = EnumType {
     name: "Columns",
     description: "The columns of a CLI run's CSV",
@@ -116,8 +128,14 @@ pub const BEAM_TYPE: EnumType = EnumType {
 };
 
 /// Every enumeration of the FMU's table, in the order of the model description.
-pub const ENUM_TYPES: &[EnumType] =
-    &[FORMULATION_TYPE, PHI_SOURCE_TYPE, PHI_INTERPOLATION_TYPE, RANGE_CHECK_TYPE, BEAM_TYPE];
+pub const ENUM_TYPES: &[EnumType] = &[
+    FORMULATION_TYPE,
+    PHI_SOURCE_TYPE,
+    PHI_INTERPOLATION_TYPE,
+    RANGE_CHECK_TYPE,
+    BEAM_TYPE,
+    ENERGY_CHECK_TYPE,
+];
 
 /// What kind of value a setting holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -179,6 +197,7 @@ pub enum Key {
     FixedOrder,
     StabilityGuard,
     RangeCheck,
+    EnergyCheck,
     TEnd,
     DtOut,
     MaxRows,
@@ -364,7 +383,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 38] = [
+pub const SETTINGS: [Setting; 39] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -631,6 +650,17 @@ pub const SETTINGS: [Setting; 38] = [
         Choice(0),
         "Outside the range of validity (|v1| <= l, |theta1| <= pi/2, ...; the exact beam: a \
          centreline that crosses itself): stop, warn or off",
+        FMU,
+    ),
+    row(
+        K::EnergyCheck,
+        "energy_check",
+        Kind::Choice(&ENERGY_CHECK_TYPE),
+        Finite,
+        Choice(0),
+        "When the energy balance breaks (the energy's change against the work of the drive \
+         and the damping, after every step, within 100 rtol of the energy handled, at most \
+         10 %): the run is numerically unstable; stop, warn or off",
         FMU,
     ),
     row(K::TEnd, "t_end", real("s"), Positive, Real(10.0), "End time of a CLI run", NOWHERE),

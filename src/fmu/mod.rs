@@ -36,7 +36,7 @@ use variables::{
 pub const MAX_STEPS_PER_DO_STEP: u64 = 1_000_000;
 
 /// Version of the model's part of a serialized state; bump it when `visit_state` changes.
-const STATE_VERSION: u32 = 6;
+const STATE_VERSION: u32 = 7;
 
 /// The beam–body FMU's model: the values, the run from ExitInitializationMode on, the
 /// outputs computed at the current time, and what the host has been told about φ.
@@ -54,8 +54,9 @@ pub struct BeamBodyFmu {
     /// Where the integrator must stop: the experiment's stop time, or none (∞).
     stop: f64,
     /// Running ahead, the integrator's last step, which ends after the communication time,
-    /// left the range of validity (`range_check = stop`): the next DoStep that reaches its end
-    /// fails there ([`Run::range_violation`] says why).
+    /// left the range of validity (`range_check = stop`) or broke the energy balance
+    /// (`energy_check = stop`): the next DoStep that reaches its end fails there
+    /// ([`Run::exit_reason`] says why).
     exit_ahead: bool,
     /// The host's intermediate-update callback set no φ: the next step extends the samples
     /// held. Set and used within one fmi3DoStep, so not part of the FMU state.
@@ -500,7 +501,7 @@ impl fmi::Model for BeamBodyFmu {
             return Err(format!("field `integrator time` = {t} {what} `time` = {}", at.time));
         }
         v.flag("exit_ahead", &mut self.exit_ahead);
-        if self.exit_ahead && !(ahead && t > at.time && run.range_violation().is_some()) {
+        if self.exit_ahead && !(ahead && t > at.time && run.exit_reason().is_some()) {
             return Err("field `exit_ahead` = true, but the integrator's last step is not \
                         ahead and out of the range of validity"
                 .into());
@@ -553,7 +554,7 @@ impl fmi::CoSimulation for BeamBodyFmu {
                 self.at = to;
                 return Ok(());
             }
-            let (t, why) = (run.t(), run.range_violation().map(|e| e.to_string()));
+            let (t, why) = (run.t(), run.exit_reason());
             self.at = t;
             let message = why.unwrap_or_else(|| "the state left the range of validity".into());
             return Err(StepFailure { t, message });
@@ -572,7 +573,9 @@ impl fmi::CoSimulation for BeamBodyFmu {
         match stepped {
             // Running ahead, the step that crossed `to` left the range after it: this step is
             // complete; the one that reaches the exit fails there.
-            Err(SimError::Solver(SolverError::OutOfRange { .. })) if ahead && run.t() > to => {
+            Err(SimError::Solver(SolverError::OutOfRange { .. }) | SimError::Unstable(_))
+                if ahead && run.t() > to =>
+            {
                 self.exit_ahead = true;
             }
             Err(SimError::Solver(SolverError::TooManySteps { .. })) if shared => {

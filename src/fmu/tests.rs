@@ -89,6 +89,51 @@ fn write_fuzz_regressions() {
         let i = at("piece", 1);
         b[i..i + 8].copy_from_slice(&0.5f64.to_le_bytes());
     });
+    // FMI 3.0 states, which an FMI 2.0 instance refuses at fmi2SetFMUstate: the same scene's,
+    // which restores into an FMI 3.0 instance; and that state with 100 J of the drive's work
+    // that never happened, which the reader accepts (a finite number) and whose next step
+    // discards, the energy balance broken (the fuzz target once checked such a discard by
+    // FMI 2.0's name).
+    let (mut inst3, _) = law_instance3(1e-6);
+    for k in 0..60 {
+        assert_eq!(inst3.do_step(k as f64 * 0.0085, 0.0085), Status::Ok);
+    }
+    let snap3 = inst3.get_state().unwrap();
+    let bytes3 = inst3.serialize(&snap3).unwrap();
+    let offsets3 = crate::fmi::field_offsets(&snap3);
+    let work = offsets3.iter().find(|f| f.0 == "energy_work").unwrap().1;
+    let write3 = |file: &str, edit: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = bytes3.clone();
+        edit(&mut b);
+        std::fs::write(dir.join(file), [&[1u8][..], &b].concat()).unwrap();
+    };
+    write3("fmi3-state-restores-into-an-fmi3-instance", &|_| {});
+    write3("fmi3-state-whose-step-discards", &|b| {
+        let w = f64::from_le_bytes(b[work..work + 8].try_into().unwrap()) + 100.0;
+        b[work..work + 8].copy_from_slice(&w.to_le_bytes());
+    });
+}
+
+/// An FMI 3.0 co-simulation of the paper's scene, its law, initialized at rtol `rtol`.
+fn law_instance3(rtol: f64) -> (Instance, Messages) {
+    let messages: Messages = Rc::default();
+    let sink = messages.clone();
+    let log: Logger = Box::new(move |s, _c, m| sink.borrow_mut().push((s, m.to_string())));
+    let cs = crate::fmi3::CoSimulationArgs {
+        event_mode_used: false,
+        required: &[],
+        intermediate_update: None,
+    };
+    let interface = crate::fmi::Interface::CoSimulation;
+    let guid = super::variables::guid();
+    let mut inst = crate::fmi3::instantiate("test", interface, guid, log, false, Some(cs))
+        .expect("instantiates");
+    let law = |v: i64| crate::fmi::Value::Integer(v as i32);
+    let base = crate::fmi::BaseType::Int64;
+    assert_eq!(inst.set("SetInt64", base, &[Var::PhiSource.vr()], &[2i64], law), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode_with(Some(rtol), 0.0, Some(10.2)), Status::Ok);
+    assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+    (inst, messages)
 }
 
 /// A new instance restores `bytes`, a state of `a`; both take the steps `steps` of 8.5 ms and
@@ -382,4 +427,82 @@ fn the_parts_of_a_step_share_its_budget_of_integrator_steps() {
     // A new step has the whole budget again.
     b.begin_step();
     b.do_step(failed.t, failed.t + part, &mut notes).unwrap();
+}
+
+/// A run the integrator cannot vouch for (the exact beam in 4 undamped elements at rtol 1e-3,
+/// whose highest modes BDF3–5 amplify): DoStep discards, saying why and what to do, in FMI 2.0
+/// and 3.0; with `energy_check = warn` the run goes on after one warning.
+#[test]
+fn a_broken_energy_balance_discards_the_step() {
+    let setup = |inst: &mut Instance, set_int: &dyn Fn(&mut Instance, Var, i64) -> Status| {
+        assert_eq!(set_int(inst, Var::NElements, 4), Status::Ok);
+        assert_eq!(set_int(inst, Var::Beam, 2), Status::Ok);
+    };
+    let run = |inst: &mut Instance, msgs: &Messages| {
+        let h = 0.0085;
+        for k in 0..1200 {
+            let status = inst.do_step(k as f64 * h, h);
+            if status != Status::Ok {
+                return (status, k as f64 * h, msgs.borrow().last().cloned());
+            }
+        }
+        (Status::Ok, 10.2, None)
+    };
+    // FMI 2.0.
+    let (mut inst, msgs) = new_instance();
+    assert_eq!(inst.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
+    setup(&mut inst, &|i, v, k| i.set_integer(&[v.vr()], &[k as i32]));
+    assert_eq!(inst.setup_experiment(Some(1e-3), 0.0, Some(10.2)), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+    let (status, t, msg) = run(&mut inst, &msgs);
+    assert_eq!(status, Status::Discard, "{msg:?}");
+    let (_, msg) = msg.unwrap();
+    assert!(msg.contains("numerical instability") && msg.contains("tighter rtol"), "{msg}");
+    assert!(t > 0.5 && t < 10.0, "{t}");
+    // The same, going on after a warning.
+    let (mut inst, msgs) = new_instance();
+    assert_eq!(inst.set_integer(&[Var::PhiSource.vr()], &[2]), Status::Ok);
+    setup(&mut inst, &|i, v, k| i.set_integer(&[v.vr()], &[k as i32]));
+    assert_eq!(inst.set_integer(&[Var::EnergyCheck.vr()], &[2]), Status::Ok);
+    assert_eq!(inst.setup_experiment(Some(1e-3), 0.0, Some(10.2)), Status::Ok);
+    assert_eq!(inst.enter_initialization_mode(), Status::Ok);
+    assert_eq!(inst.exit_initialization_mode(), Status::Ok);
+    let h = 0.0085;
+    let mut warnings = 0;
+    for k in 0..1200 {
+        match inst.do_step(k as f64 * h, h) {
+            Status::Ok => {}
+            Status::Warning => warnings += 1,
+            other => panic!("{other:?} at step {k}: {:?}", msgs.borrow().last()),
+        }
+    }
+    assert_eq!(warnings, 1);
+    assert!(msgs.borrow().iter().any(|(_, m)| m.contains("energy_check = warn")));
+}
+
+/// A restored FMI 3.0 state whose balance has 100 J too much of the drive's work (the fuzz
+/// regression `fmi3-state-whose-step-discards`): the next fmi3DoStep discards, naming the
+/// broken balance.
+#[test]
+fn a_state_with_a_broken_balance_discards_its_next_step() {
+    let (mut inst, msgs) = law_instance3(1e-6);
+    for k in 0..60 {
+        assert_eq!(inst.do_step(k as f64 * 0.0085, 0.0085), Status::Ok);
+    }
+    let snap = inst.get_state().unwrap();
+    let mut bytes = inst.serialize(&snap).unwrap();
+    let offsets = crate::fmi::field_offsets(&snap);
+    let work = offsets.iter().find(|f| f.0 == "energy_work").unwrap().1;
+    let w = f64::from_le_bytes(bytes[work..work + 8].try_into().unwrap()) + 100.0;
+    bytes[work..work + 8].copy_from_slice(&w.to_le_bytes());
+    crate::fmi::reseal(&mut bytes);
+    let restored = inst.deserialize(&bytes).unwrap();
+    assert_eq!(inst.set_state(&restored), Status::Ok);
+    // Running ahead, the integrator may hold the next communication point already: the
+    // check comes with its next step.
+    let discarded = (60..63).find(|&k| inst.do_step(k as f64 * 0.0085, 0.0085) != Status::Ok);
+    assert!(discarded.is_some());
+    let last = msgs.borrow().last().cloned().unwrap().1;
+    assert!(last.contains("fmi3DoStep") && last.contains("energy balance is broken"), "{last}");
 }

@@ -146,6 +146,7 @@ pub enum Var {
     Q,
     Dq,
     Ddq,
+    EnergyCheck,
 }
 
 impl Var {
@@ -553,6 +554,7 @@ pub const VARIABLES: &[Variable] = &[
          Exchange)",
         Some(Var::Dq),
     ),
+    param(Var::EnergyCheck, Key::EnergyCheck),
 ];
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates

@@ -259,10 +259,14 @@ impl BeamBody {
         }
     }
 
+    /// The beam's kinetic and strain energies T1 = ½q̇ᵀM_b q̇ and Π1 = ½qᵀKq [J].
+    pub fn beam_energies(&self, q: Vector2<f64>, qd: Vector2<f64>) -> (f64, f64) {
+        (0.5 * qd.dot(&(self.mb * qd)), 0.5 * q.dot(&(self.k * q)))
+    }
+
     /// Total mechanical energy T1 + T2 + Π1 + Π2 [J], Π2 = −M2 g (u_h + r cos θ).
     pub fn energy(&self, phi: &Phi, q: Vector2<f64>, qd: Vector2<f64>, u_h: f64, du_h: f64) -> f64 {
-        let t1 = 0.5 * qd.dot(&(self.mb * qd));
-        let p1 = 0.5 * q.dot(&(self.k * q));
+        let (t1, p1) = self.beam_energies(q, qd);
         let (t2, p2) = self.body_energies(phi, q, qd, u_h, du_h);
         t1 + t2 + p1 + p2
     }

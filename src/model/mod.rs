@@ -3,6 +3,7 @@
 //! `shared/model-notes.md` (paper eq. 8–13). No I/O, no `unsafe`.
 #![forbid(unsafe_code)]
 
+mod balance;
 mod band;
 mod beam_n;
 mod dense;
@@ -20,6 +21,7 @@ mod systems;
 mod systems_exact;
 mod systems_n;
 
+pub use balance::{Energy, EnergyBalance, Power};
 pub use beam_n::{BeamN, SystemN};
 pub use dynamics::{BeamBody, Modes, Reactions};
 pub use dynamics_n::{BeamBodyN, MAX_ELEMENTS};

@@ -14,9 +14,11 @@ use std::ops::ControlFlow;
 
 pub use crate::scene::{InitialState, PhiSource, Scene};
 
+mod balance;
 mod equations;
 mod run;
 
+pub use balance::{Unstable, MAX_RELATIVE, RTOL_FACTOR};
 pub use equations::Equations;
 pub use run::{dae, dae_start, elements_system, two_dof, two_dof_start, PhiInput, Run};
 
@@ -26,6 +28,8 @@ pub enum SimError {
     /// The settings do not make a run: the message names the setting.
     Setting(String),
     Solver(SolverError),
+    /// The energy balance broke: the integration went numerically unstable.
+    Unstable(Unstable),
     /// The consumer of the outputs ended the run ([`simulate_partial`]).
     Stopped,
 }
@@ -34,7 +38,15 @@ impl fmt::Display for SimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SimError::Setting(s) => f.write_str(s),
+            SimError::Solver(e @ SolverError::OutOfRange { name: "v1" | "theta1", .. }) => write!(
+                f,
+                "integration failed: {e}. The quadratic beam holds only there: a turn this fast \
+                 or a load this heavy needs beam = exact, valid at any rotation; a run that went \
+                 numerically unstable gets there too (energy_check says so first, unless it is \
+                 off): then a tighter rtol, max_order = 2 or damping"
+            ),
             SimError::Solver(e) => write!(f, "integration failed: {e}"),
+            SimError::Unstable(e) => write!(f, "integration failed: {e}"),
             SimError::Stopped => f.write_str("the run was stopped by the consumer of its outputs"),
         }
     }
@@ -55,6 +67,9 @@ pub struct Report {
     pub stats: Stats,
     /// With `range_check = warn`: where the run left the range of validity.
     pub warning: Option<String>,
+    /// The largest error of the energy balance relative to the energy the run handled
+    /// (`None`: `energy_check = off`).
+    pub energy_error: Option<f64>,
 }
 
 /// Runs the scene, calling `sink` with the outputs at every output time.
@@ -118,7 +133,7 @@ fn with_run(
     let mut warning = None;
     let result = body(&mut run, &mut warning);
     let warning = warning.or_else(|| run.take_warning());
-    (Report { stats: run.stats(), warning }, result)
+    (Report { stats: run.stats(), warning, energy_error: run.energy_worst() }, result)
 }
 
 /// Keeps the warning of the step just taken, if any.
@@ -136,6 +151,12 @@ fn host_sample(scene: &Scene, t: f64) -> Sample {
     } else {
         Sample::value(t, scene.law.eval(t).phi)
     }
+}
+
+/// Checks that the scene makes a run, as [`simulate`] starts it, without stepping it: the
+/// settings, the model and the start.
+pub fn check(scene: &Scene) -> Result<(), SimError> {
+    start(scene).map(drop)
 }
 
 /// The run of `simulate` at t = 0, before its first step.

@@ -3,17 +3,19 @@
 //! times asked, and restarts the integrator where φ'' jumps.
 #![forbid(unsafe_code)]
 
+use super::balance::{self, EnergyMonitor};
 use super::SimError;
 use crate::math;
 use crate::model::{
-    BeamBody, BeamBodyN, BeamN, DaeSystem, ElementsSystem, Formulation, HostSignal, Kinematics,
-    Outputs, PaperLaw, Phi, PhiPiece, Poly, RangeCheck, Sample, SystemN, TwoDofSystem,
+    BeamBody, BeamBodyN, BeamN, DaeSystem, ElementsSystem, Energy, EnergyBalance, Formulation,
+    HostSignal, Kinematics, Outputs, PaperLaw, Phi, PhiPiece, Poly, Power, RangeCheck, Sample,
+    SystemN, TwoDofSystem,
 };
 use crate::scene::{InitialState, PhiSource, Scene};
 use crate::solver::{Bdf, BdfConfig, OdeSystem, RangeViolation, SolverError, Stats, StepOutcome};
 use crate::visit::StateVisitor;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, Dim, Dyn, SVector, U4, U6};
+use nalgebra::{DefaultAllocator, Dim, Dyn, OVector, SVector, U4, U6};
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
 /// one, so boxing would only add an indirection to every piece.
@@ -61,36 +63,76 @@ pub struct Run {
     /// The integrator's step limit per call ([`BdfConfig::max_steps`]), which
     /// [`step_each`](Self::step_each) applies to its own calls.
     max_steps: u64,
+    /// The energy check after every step (`energy_check`); `None` when it is off.
+    energy: Option<EnergyMonitor>,
     bdf: Integrator,
 }
 
-/// [`Bdf::advance`], whose first step, with `probe`, is a [`Bdf::probe_step`]: the
-/// integrator restarts at its time if the history did not survive a change of f there.
-fn advance_probing<D: Dim, S: OdeSystem<D>>(
-    bdf: &mut Bdf<D>,
+/// After an accepted step of `bdf`: the powers at the step's Gauss points, from the dense
+/// output and its derivative ([`balance::GAUSS_2`]) in the buffers `buf`, and the energy
+/// `monitor`'s check when due.
+fn monitor_step<D: Dim, S: OdeSystem<D> + EnergyBalance<D>>(
+    monitor: &mut Option<EnergyMonitor>,
     sys: &S,
-    tout: f64,
-    tstop: f64,
-    probe: bool,
-    single: bool,
-) -> Result<(), SolverError>
+    bdf: &Bdf<D>,
+    buf: &mut (OVector<f64, D>, OVector<f64, D>),
+) -> Result<(), SimError>
 where
     DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
+    let Some(m) = monitor.as_mut().filter(|m| m.active()) else {
+        return Ok(());
+    };
+    let (t, h) = (bdf.t(), bdf.last_step().1);
+    let mut p = [Power::default(); 2];
+    for (p, c) in p.iter_mut().zip(balance::GAUSS_2) {
+        let ti = t - h + c * h;
+        let phi = sys.phi(ti);
+        if !sys.passive(&phi) {
+            bdf.interpolate_into(ti, &mut buf.0, &mut buf.1)?;
+            *p = sys.power(&phi, &buf.0, &buf.1);
+        }
+    }
+    if m.step(t, h, p) {
+        m.check(sys.energy(t, bdf.y())).map_err(SimError::Unstable)?;
+    }
+    Ok(())
+}
+
+/// [`Bdf::advance`], whose first step, with `probe`, is a [`Bdf::probe_step`]: the
+/// integrator restarts at its time if the history did not survive a change of f there. After
+/// every accepted step the energy `monitor` checks the balance.
+fn advance_probing<D: Dim, S: OdeSystem<D> + EnergyBalance<D>>(
+    bdf: &mut Bdf<D>,
+    sys: &S,
+    (tout, tstop): (f64, f64),
+    probe: bool,
+    single: bool,
+    monitor: &mut Option<EnergyMonitor>,
+) -> Result<(), SimError>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    let mut buf = (bdf.y().clone(), bdf.y().clone());
+    let mut after = |bdf: &Bdf<D>| monitor_step(monitor, sys, bdf, &mut buf);
     if probe && bdf.t() < tout {
         if bdf.probe_step(sys, tstop)? == StepOutcome::Rejected {
             bdf.reinit(bdf.t(), bdf.y().clone())?;
-        } else if single {
-            return Ok(());
+        } else {
+            after(bdf)?;
+            if single {
+                return Ok(());
+            }
         }
     }
     if single {
         if bdf.t() < tout {
             bdf.step(sys, tstop)?;
+            after(bdf)?;
         }
         return Ok(());
     }
-    bdf.advance(sys, tout, tstop)
+    bdf.advance_with(sys, tout, tstop, after)
 }
 
 /// The system of the four-state formulations (reduced, linear) on piece `phi`: the one step
@@ -156,7 +198,64 @@ impl Run {
             run.use_elements(elements, &config, t0, init)?;
         }
         run.set_range_check(scene.range_check);
+        if scene.energy_check != RangeCheck::Off {
+            let rtol = (config.fixed_step.is_none()).then_some(config.rtol);
+            let e = run.energy_now();
+            run.energy = Some(EnergyMonitor::new(scene.energy_check, rtol, t0, e));
+        }
         Ok(run)
+    }
+
+    /// The energy check's part of the last step, which ended in an error that did not stop the
+    /// run (the range left with `range_check = warn`).
+    fn monitor_last_step(&mut self) -> Result<(), SimError> {
+        let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
+        let monitor = &mut self.energy;
+        match &self.bdf {
+            Integrator::TwoDof(b) => {
+                let sys = two_dof(model, piece, formulation);
+                monitor_step(monitor, &sys, b, &mut (*b.y(), *b.y()))
+            }
+            Integrator::Dae(b) => {
+                let sys = dae(model, piece, formulation);
+                monitor_step(monitor, &sys, b, &mut (*b.y(), *b.y()))
+            }
+            Integrator::Elements(b) => {
+                let model = self.elements.as_deref().expect("a run of elements has its model");
+                let sys = model.system(piece, formulation, true);
+                monitor_step(monitor, &sys, b, &mut (b.y().clone(), b.y().clone()))
+            }
+        }
+    }
+
+    /// The energy at the solver's last step, with the piece in use.
+    fn energy_now(&self) -> Energy {
+        let t = self.t();
+        match &self.bdf {
+            Integrator::TwoDof(b) => self.two_dof().energy(t, b.y()),
+            Integrator::Dae(b) => self.dae().energy(t, b.y()),
+            Integrator::Elements(b) => self.elements_system().energy(t, b.y()),
+        }
+    }
+
+    /// Switches to `piece` at the current time, for the energy check too: where φ or φ′
+    /// `jumped`, the energy there under the old piece and the new ([`EnergyMonitor::jump`]).
+    fn set_piece(&mut self, piece: PhiPiece, jumped: bool) -> Result<(), SimError> {
+        let active = self.energy.as_ref().is_some_and(EnergyMonitor::active);
+        let before = (active && jumped).then(|| self.energy_now());
+        self.piece = piece;
+        if let Some(before) = before {
+            let after = self.energy_now();
+            let m = self.energy.as_mut().expect("active");
+            m.jump(before, after).map_err(SimError::Unstable)?;
+        }
+        Ok(())
+    }
+
+    /// The largest error of the energy balance so far relative to the energy the run has
+    /// handled; `None` when the check is off.
+    pub fn energy_worst(&self) -> Option<f64> {
+        self.energy.as_ref().map(EnergyMonitor::worst)
     }
 
     /// A run from `init` at `t0` driven by the law. The DAE's u2 and u̇2 start consistent.
@@ -214,6 +313,7 @@ impl Run {
             untested_join: false,
             single_step: false,
             max_steps: options.max_steps,
+            energy: None,
             bdf,
         })
     }
@@ -316,7 +416,7 @@ impl Run {
     /// the piece beyond `t` is not known yet, and [`step_to`](Self::step_to) lands on `t`).
     pub fn step_past(&mut self, t: f64, tstop: f64) -> Result<(), SimError> {
         debug_assert!(matches!(self.input, PhiInput::Law(_)), "the law's input is known ahead");
-        self.interval(t, |run| Ok(run.advance_to(t, tstop)?))
+        self.interval(t, |run| run.advance_to(t, tstop))
     }
 
     /// Steps to exactly `t`, calling `sink` at each of `times` (increasing, up to t) on the
@@ -338,7 +438,7 @@ impl Run {
                 run.advance_to(tout.min(t), t)?;
                 sink(run, tout)?;
             }
-            Ok(run.advance_to(t, t)?)
+            run.advance_to(t, t)
         })
     }
 
@@ -436,14 +536,15 @@ impl Run {
     /// fail repeatedly at tight tolerances (values every 8.5 ms failed at rtol 1e-10); a
     /// restart at every jump of φ″ cost 8,505 restarts at a 0.1 ms communication step.
     /// `old` is φ of the piece in use at the current time.
-    fn switch_piece(&mut self, piece: PhiPiece, old: Phi) -> Result<(), SolverError> {
+    fn switch_piece(&mut self, piece: PhiPiece, old: Phi) -> Result<(), SimError> {
         let new = match piece {
             PhiPiece::Poly(p) if p.t0 == self.t() => p.at_start(),
             _ => piece.eval(self.t()),
         };
         let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
-        self.piece = piece;
-        if !(same(old.phi, new.phi) && same(old.dphi, new.dphi)) {
+        let jumped = !(same(old.phi, new.phi) && same(old.dphi, new.dphi));
+        self.set_piece(piece, jumped)?;
+        if jumped {
             self.restart()?;
         } else if !same(old.ddphi, new.ddphi) {
             self.untested_join = true;
@@ -474,7 +575,7 @@ impl Run {
     }
 
     /// Steps until t ≥ `tout`, never past `tstop`, through the law's breakpoint.
-    fn advance_to(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
+    fn advance_to(&mut self, tout: f64, tstop: f64) -> Result<(), SimError> {
         // An output inside the last step takes no step: return before the breakpoint logic
         // and the solver's own checks, which would decide the same (at loose tolerances
         // there are more outputs than steps). Not while a join waits for its probing step.
@@ -492,7 +593,8 @@ impl Run {
         loop {
             let turning = matches!(self.piece, PhiPiece::Turn(_));
             if turning && self.t() >= bp && tout > self.t() {
-                self.piece = law.piece_from(bp);
+                // The law is C¹ at its end: φ and φ′ go on, φ″ jumps.
+                self.set_piece(law.piece_from(bp), false)?;
                 self.restart()?;
                 continue;
             }
@@ -512,7 +614,7 @@ impl Run {
     /// ([`Bdf::advance`]). A `tout` within rounding of the solver's time takes no step. With
     /// `range_check = warn`, the first step out of the range of validity records a warning
     /// and the run goes on without the check.
-    fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SolverError> {
+    fn advance(&mut self, tout: f64, tstop: f64) -> Result<(), SimError> {
         loop {
             if tout > self.t() && math::same_time(tout, self.t(), 0.0) {
                 return Ok(());
@@ -522,28 +624,33 @@ impl Run {
             let range_check = self.range != RangeCheck::Off;
             let probe = std::mem::take(&mut self.untested_join);
             let (single, before) = (self.single_step, self.t());
+            let (times, monitor) = ((tout, tstop), &mut self.energy);
             let result = match &mut self.bdf {
                 Integrator::TwoDof(b) => {
                     let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
-                    advance_probing(b, &sys, tout, tstop, probe, single)
+                    advance_probing(b, &sys, times, probe, single, monitor)
                 }
                 Integrator::Dae(b) => {
                     let sys = DaeSystem { range_check, ..dae(model, piece, formulation) };
-                    advance_probing(b, &sys, tout, tstop, probe, single)
+                    advance_probing(b, &sys, times, probe, single, monitor)
                 }
                 Integrator::Elements(b) => {
                     let model = elements_model.expect("a run of elements has its model");
                     let sys = model.system(piece, formulation, range_check);
-                    advance_probing(b, &sys, tout, tstop, probe, single)
+                    advance_probing(b, &sys, times, probe, single, monitor)
                 }
             };
             match result {
-                Err(e @ SolverError::OutOfRange { .. }) if self.range == RangeCheck::Warn => {
+                Err(SimError::Solver(e @ SolverError::OutOfRange { .. }))
+                    if self.range == RangeCheck::Warn =>
+                {
                     self.warning = Some(format!(
                         "{e}; the run goes on outside the range of validity (range_check = warn)"
                     ));
                     self.range = RangeCheck::Off;
-                    // The step that left the range stands: in single steps, it is the one.
+                    // The step that left the range stands, and its work counts.
+                    self.monitor_last_step()?;
+                    // In single steps, it is the one.
                     if single && self.t() > before {
                         return Ok(());
                     }
@@ -577,9 +684,19 @@ impl Run {
         self.range = range;
     }
 
-    /// The warning of `range_check = warn`, once: `Some` after the step that left the range.
+    /// The warning of `range_check = warn` or `energy_check = warn`, once: `Some` after the
+    /// step that left the range or broke the balance.
     pub fn take_warning(&mut self) -> Option<String> {
-        self.warning.take()
+        let energy = self.energy.as_mut().and_then(EnergyMonitor::take_warning);
+        self.warning.take().or(energy)
+    }
+
+    /// Why the run stopped at its last accepted step, made again from that step (after an FMU
+    /// state was restored, say): the state outside the range of validity, or the energy
+    /// balance broken.
+    pub fn exit_reason(&self) -> Option<String> {
+        let range = self.range_violation().map(|e| SimError::Solver(e).to_string());
+        range.or_else(|| Some(SimError::Unstable(self.energy.as_ref()?.violation()?).to_string()))
     }
 
     /// Whether `t` is not behind the integrator's last step ([`Bdf::reaches_back_to`]).
@@ -714,6 +831,9 @@ impl Run {
             self.range_set = RangeCheck::Stop;
             self.range = RangeCheck::Warn;
         }
+        if let Some(m) = &mut self.energy {
+            m.visit_state(v);
+        }
         match &mut self.bdf {
             Integrator::TwoDof(b) => b.visit_state(v),
             Integrator::Dae(b) => b.visit_state(v),
@@ -740,6 +860,9 @@ impl Run {
             || (self.range_set == RangeCheck::Warn && self.range == RangeCheck::Off);
         if !range_ok {
             return Err("field `range_warned`: set, but range_check is not warn".into());
+        }
+        if let Some(m) = &self.energy {
+            m.check_state()?;
         }
         match &self.bdf {
             Integrator::TwoDof(b) => b.check_state(),

@@ -106,7 +106,9 @@ impl Study {
                 row.status = match &e {
                     SimError::Setting(_) => Status::Invalid,
                     SimError::Solver(SolverError::OutOfRange { .. }) => Status::Stopped,
-                    SimError::Solver(_) | SimError::Stopped => Status::Failed,
+                    SimError::Solver(_) | SimError::Unstable(_) | SimError::Stopped => {
+                        Status::Failed
+                    }
                 };
                 row.message = e.to_string();
             }

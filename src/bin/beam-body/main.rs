@@ -7,7 +7,10 @@
 //! write, quietly, with status 141, as a tool that SIGPIPE ended reports in a shell.
 
 mod args;
+mod interrupt;
 mod modes;
+mod output;
+mod progress;
 mod residual;
 mod simulate;
 mod study;
@@ -21,6 +24,8 @@ pub enum Failure {
     Usage(String),
     /// Standard output was closed by its reader: no message, exit status 141.
     ClosedStdout,
+    /// Ctrl-C, SIGTERM or SIGHUP: what was kept, and where; exit status 130.
+    Interrupted(String),
 }
 
 impl From<String> for Failure {
@@ -85,5 +90,9 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
         Err(Failure::ClosedStdout) => ExitCode::from(141),
+        Err(Failure::Interrupted(message)) => {
+            note(format_args!("{message}"));
+            ExitCode::from(interrupt::STATUS)
+        }
     }
 }

@@ -1,14 +1,16 @@
 //! `beam-body simulate`: a scene's outputs as CSV.
 
 use crate::args::scene_args;
-use crate::{note, stdout_failed, CmdResult, Failure};
+use crate::output::Output;
+use crate::progress::Progress;
+use crate::{interrupt, note, CmdResult, Failure};
 use beam_body::csv;
 use beam_body::model::Outputs;
-use beam_body::sim::{simulate_partial, SimError};
+use beam_body::sim::{self, simulate_partial, SimError};
 use std::ffi::OsString;
-use std::io::{self, BufWriter, Write};
+use std::io::Write;
 use std::ops::ControlFlow;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 pub fn run(args: Vec<OsString>) -> CmdResult {
     let Some(cli) = scene_args("simulate", args)? else {
@@ -21,24 +23,13 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         ));
     }
     let scene = cli.scene;
-    // Refused before the output file is created: settings that do not make a run, a count of
-    // rows too large for the disk. (simulate_partial checks the same again, in microseconds.)
+    // Everything is checked before the output is touched: settings that do not make a run, a
+    // count of rows too large for the disk, the model and the start.
     scene.validate()?;
     let rows = scene.rows()?;
-    let to_stdout = cli.output.is_none();
-    let sink: Box<dyn Write> = match &cli.output {
-        Some(path) => Box::new(
-            std::fs::File::create(path)
-                .map_err(|e| Failure::Usage(format!("cannot create {path}: {e}")))?,
-        ),
-        None => Box::new(io::stdout().lock()),
-    };
-    // 64 KiB: a system call per 200 rows instead of 25 (8 KiB).
-    let mut out = BufWriter::with_capacity(1 << 16, sink);
-    let failed = |e: io::Error, out: &Option<String>| match out {
-        None => stdout_failed(e),
-        Some(path) => Failure::Usage(format!("writing {path} failed: {e}")),
-    };
+    sim::check(&scene).map_err(|e| Failure::Usage(e.to_string()))?;
+    interrupt::install();
+    let mut out = Output::open(cli.output.as_deref())?;
     let (beam, shape) = (scene.columns >= 1, scene.columns == 2);
     let extra = if beam { &Outputs::BEAM_COLUMNS[..] } else { &[] };
     let mut header: Vec<String> = Outputs::COLUMNS
@@ -52,15 +43,27 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
             header.push(csv::header(&format!("theta_{k}"), Some("rad")));
         }
     }
-    writeln!(out, "{}", header.join(",")).map_err(|e| failed(e, &cli.output))?;
+    if let Err(e) = writeln!(out.writer(), "{}", header.join(",")) {
+        let failure = out.failed(e);
+        out.abandon();
+        return Err(failure);
+    }
 
     let mut io_error = None;
     let mut line = String::with_capacity(400);
-    let (mut written, mut max_drift) = (0u64, 0.0f64);
+    let (mut written, mut max_drift, mut last_t) = (0u64, 0.0f64, f64::NAN);
     let (mut e_min, mut e_max) = (f64::INFINITY, f64::NEG_INFINITY);
     let start = Instant::now();
     let (mut nodes, n_nodes) = (Vec::new(), scene.params.n_elements);
+    let t_end = scene.t_end;
+    let mut progress =
+        Progress::new(t_end, Duration::from_secs(2), false, false, move |t, rate| {
+            format!("t = {t:.4} of {t_end} s, {rate:.3} simulated s per s")
+        });
     let (report, result) = simulate_partial(&scene, |o, run| {
+        if interrupt::interrupted() {
+            return ControlFlow::Break(());
+        }
         line.clear();
         for (k, v) in o.values().iter().enumerate() {
             if k > 0 {
@@ -87,28 +90,41 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         }
         line.push('\n');
         // The first failed write ends the run: nothing is computed for a closed pipe.
-        if let Err(e) = out.write_all(line.as_bytes()) {
+        if let Err(e) = out.writer().write_all(line.as_bytes()) {
             io_error = Some(e);
             return ControlFlow::Break(());
         }
         written += 1;
+        last_t = o.t;
         max_drift = max_drift.max(o.drift.abs());
         e_min = e_min.min(o.energy);
         e_max = e_max.max(o.energy);
+        progress.update(o.t);
         ControlFlow::Continue(())
     });
+    progress.finish();
     let elapsed = start.elapsed();
-    if let Some(e) = io_error.or_else(|| out.flush().err()) {
-        return Err(failed(e, &cli.output));
+    if let Some(e) = io_error {
+        let failure = out.failed(e);
+        out.abandon();
+        return Err(failure);
     }
-    drop(out);
-    if let Err(e) = &result {
-        let stopped = matches!(e, SimError::Stopped);
-        debug_assert!(!stopped, "only a failed write stops the run, and it returned above");
-        return Err(Failure::Usage(format!(
-            "{e} ({written} of {rows} rows written{})",
-            if to_stdout { "" } else { " to the file" }
-        )));
+    let upto = if written > 0 { format!(", up to t = {last_t}") } else { String::new() };
+    match &result {
+        Err(SimError::Stopped) if interrupt::interrupted() => {
+            let wrote = out.abandon();
+            return Err(Failure::Interrupted(format!(
+                "interrupted: {written} of {rows} rows{upto} written to {wrote}; a run cannot \
+                 resume: run it again"
+            )));
+        }
+        Err(e) => {
+            let wrote = out.abandon();
+            return Err(Failure::Usage(format!(
+                "{e} ({written} of {rows} rows{upto} written to {wrote})"
+            )));
+        }
+        Ok(()) => out.finish()?,
     }
     if let Some(w) = &report.warning {
         note(format_args!("beam-body: warning: {w}"));
@@ -127,7 +143,7 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
             if s.stability_guard { "on" } else { "off" }
         )
     };
-    note(format_args!("beam-body: {} formulation, {mode}", scene.formulation));
+    note(format_args!("beam-body: {}, {mode}", scene.describe()));
     note(format_args!(
         "  steps {}  rejected {} (error test {}, Newton {})  f-evals {} (+{} for Jacobians)",
         stats.steps,
@@ -145,8 +161,10 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         stats.order_caps,
         stats.restarts
     ));
+    let balance = report.energy_error.map_or("off".into(), |e| format!("{e:.1e}"));
     note(format_args!(
-        "  rows {written}  max |drift| {max_drift:.3e} m  energy range {:.6e} J  wall {:.3} ms",
+        "  rows {written}  max |drift| {max_drift:.3e} m  energy range {:.6e} J  energy balance \
+         error {balance}  wall {:.3} ms",
         e_max - e_min,
         elapsed.as_secs_f64() * 1e3
     ));

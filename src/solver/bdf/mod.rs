@@ -444,6 +444,36 @@ where
         })
     }
 
+    /// The state and its derivative at `t` inside the last step, from the Nordsieck
+    /// polynomial, into `y` and `dy` (CVODE's CVodeGetDky with k = 0 and 1: Σ_j z_j s^j and
+    /// Σ_j j z_j s^(j−1) / h), component by component with no temporary vector.
+    pub fn interpolate_into(
+        &self,
+        t: f64,
+        y: &mut OVector<f64, D>,
+        dy: &mut OVector<f64, D>,
+    ) -> Result<(), SolverError> {
+        let lo = self.t - self.hu;
+        let fuzz = 100.0 * f64::EPSILON * (self.t.abs() + self.hu.abs());
+        if !(self.started && t >= lo - fuzz && t <= self.t + fuzz) {
+            return Err(SolverError::OutsideLastStep { t, lo, hi: self.t });
+        }
+        let (s, q) = ((t - self.t) / self.hscale, self.q);
+        let z: [&[f64]; NCOL] = std::array::from_fn(|j| self.zn[j].as_slice());
+        let (y, dy) = (y.as_mut_slice(), dy.as_mut_slice());
+        let inv_h = 1.0 / self.hscale;
+        for i in 0..y.len() {
+            let (mut v, mut d) = (z[q][i], q as f64 * z[q][i]);
+            for j in (1..q).rev() {
+                v = v * s + z[j][i];
+                d = d * s + j as f64 * z[j][i];
+            }
+            y[i] = v * s + z[0][i];
+            dy[i] = d * inv_h;
+        }
+        Ok(())
+    }
+
     /// Whether `t` is not behind the last step `[t_n − h_u, t_n]` (to within round-off):
     /// what [`advance`](Self::advance) accepts as a target without an error. A `t` in
     /// `[t_n − h_u, t_n]` then needs no step, only [`interpolate`](Self::interpolate).
@@ -461,17 +491,31 @@ where
         tout: f64,
         tstop: f64,
     ) -> Result<(), SolverError> {
+        self.advance_with(sys, tout, tstop, |_| Ok(()))
+    }
+
+    /// [`advance`](Self::advance), calling `after` with the solver after every accepted
+    /// step; an error of `after` ends the call, with the solver at that step.
+    pub fn advance_with<S: OdeSystem<D>, E: From<SolverError>>(
+        &mut self,
+        sys: &S,
+        tout: f64,
+        tstop: f64,
+        mut after: impl FnMut(&Self) -> Result<(), E>,
+    ) -> Result<(), E> {
         // A target behind t is fine while it lies in the last step (dense output serves it).
         if !self.reaches_back_to(tout) {
-            return Err(SolverError::TimeBehind { t: self.t, target: tout });
+            return Err(SolverError::TimeBehind { t: self.t, target: tout }.into());
         }
         let mut taken = 0u64;
         while self.t < tout {
             if taken == self.cfg.max_steps {
-                return Err(SolverError::TooManySteps { t: self.t, max_steps: taken });
+                return Err(SolverError::TooManySteps { t: self.t, max_steps: taken }.into());
             }
-            if self.step(sys, tstop)? == StepOutcome::ReachedStop && self.t < tout {
-                return Err(SolverError::TimeBehind { t: tstop, target: tout });
+            let outcome = self.step(sys, tstop)?;
+            after(self)?;
+            if outcome == StepOutcome::ReachedStop && self.t < tout {
+                return Err(SolverError::TimeBehind { t: tstop, target: tout }.into());
             }
             taken += 1;
         }
