@@ -64,16 +64,65 @@ fn type_name(v: &toml::Value) -> &'static str {
     }
 }
 
-/// A TOML syntax error on one line: "line L, column C: what".
+/// A TOML syntax error on one line: "line L, column C: what". A duplicate key is named, with
+/// the line that gave it first.
 pub fn syntax_error(text: &str, e: &toml::de::Error) -> String {
     let message = e.message().trim().replace('\n', " ");
-    match e.span() {
-        Some(span) => {
-            let (line, column) = line_column(text, span.start);
-            format!("line {line}, column {column}: not valid TOML: {message}")
+    let Some(span) = e.span() else {
+        return format!("not valid TOML: {message}");
+    };
+    let (line, column) = line_column(text, span.start);
+    let key = text.get(span).map(str::trim).filter(|k| !k.is_empty() && !k.contains('\n'));
+    let what = match key {
+        Some(key) if message == "duplicate key" => {
+            let (name, first) = duplicate(text, line, key);
+            let first = first.map_or(String::new(), |l| format!(" (first given on line {l})"));
+            format!("duplicate key `{name}`{first}: a key may be given only once")
         }
-        None => format!("not valid TOML: {message}"),
+        _ => message,
+    };
+    format!("line {line}, column {column}: not valid TOML: {what}")
+}
+
+/// The name of the duplicate `key` on `line` (a table's whole name, `parameters.EI`), and the
+/// line before it that gave it first: the same `[table]` anywhere before, or `key = …` in the
+/// same table (after the last table header).
+fn duplicate(text: &str, line: usize, key: &str) -> (String, Option<usize>) {
+    let lines: Vec<&str> = text.lines().collect();
+    let header = |l: &str| {
+        let l = l.split('#').next().unwrap_or("").trim();
+        let inner = l.strip_prefix('[').and_then(|l| l.strip_suffix(']'))?;
+        (!inner.starts_with('[')).then(|| dotted(inner))
+    };
+    let before = &lines[..line.saturating_sub(1).min(lines.len())];
+    if let Some(table) = lines.get(line.saturating_sub(1)).and_then(|l| header(l)) {
+        let first = before.iter().position(|l| header(l).as_ref() == Some(&table));
+        return (table, first.map(|k| k + 1));
     }
+    let name = dotted(key);
+    for (k, l) in before.iter().enumerate().rev() {
+        if l.trim_start().starts_with('[') {
+            break;
+        }
+        if l.split_once('=').is_some_and(|(left, _)| dotted(left) == name) {
+            return (name, Some(k + 1));
+        }
+    }
+    (name, None)
+}
+
+/// A (dotted) key by its names: `a . "b"` is `a.b`.
+fn dotted(key: &str) -> String {
+    let unquoted = |k: &str| {
+        let k = k.trim();
+        let quoted = |q: char| k.len() >= 2 && k.starts_with(q) && k.ends_with(q);
+        if quoted('"') || quoted('\'') {
+            k[1..k.len() - 1].to_string()
+        } else {
+            k.to_string()
+        }
+    };
+    key.split('.').map(unquoted).collect::<Vec<_>>().join(".")
 }
 
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
@@ -172,5 +221,30 @@ mod tests {
         assert!(e.contains("`max_order` = 3.0: must be an integer in 1..=5, not a real"), "{e}");
         let e = Scene::from_toml("[model]\nEI = 1.0").unwrap_err();
         assert!(e.starts_with("line 1: `[model]`: a scene has no tables"), "{e}");
+    }
+
+    /// The `toml` crate says only "duplicate key": the message names the key and the line
+    /// that gave it first.
+    #[test]
+    fn a_duplicate_key_is_named_with_both_lines() {
+        let e = Scene::from_toml("t_end = 2\nEI = 900\n\n  t_end = 3\n").unwrap_err();
+        assert_eq!(
+            e,
+            "line 4, column 3: not valid TOML: duplicate key `t_end` (first given on line 1): \
+             a key may be given only once"
+        );
+        let e = Scene::from_toml("EI = 1\n\"EI\" = 2\n").unwrap_err();
+        assert!(e.contains("duplicate key `EI` (first given on line 1)"), "{e}");
+        // In a table (a study file's), the first is the one in the same table.
+        let text = "[a]\nx = 1\n[b]\nx = 1\nx = 2\n[a]\n";
+        let e = syntax_error(text, &text.parse::<toml::Table>().unwrap_err());
+        let want = "line 5, column 1: not valid TOML: duplicate key `x` (first given on line 4)";
+        assert!(e.starts_with(want), "{e}");
+        let text = "[a]\nx = 1\n[b]\n[ a ]\n";
+        let e = syntax_error(text, &text.parse::<toml::Table>().unwrap_err());
+        assert!(e.contains("duplicate key `a` (first given on line 1)"), "{e}");
+        let text = "[parameters.EI]\nvalues = [1.0]\n\n[parameters . \"EI\"] # again\n";
+        let e = syntax_error(text, &text.parse::<toml::Table>().unwrap_err());
+        assert!(e.contains("duplicate key `parameters.EI` (first given on line 1)"), "{e}");
     }
 }
