@@ -71,6 +71,8 @@ equations of motion, then the accelerations of the model's right-hand side:
   reduced, linear:     phi dphi ddphi v1 theta1 dv1 dtheta1 ddv1 ddtheta1
   dae, dae_stabilized: phi dphi ddphi v1 theta1 u2 dv1 dtheta1 du2 ddv1 ddtheta1 ddu2
 (SI units). The independent oracle of the tests uses it. --formulation is required.
+These are the paper's equations, of one element of the quadratic beam without damping or
+the beam's weight: n_elements, beam, damping_* and beam_gravity other than that are refused.
 
 {}{}",
             options_help(false),

@@ -4,6 +4,8 @@
 use crate::args::scene_args;
 use crate::{stdout_failed, CmdResult, Failure};
 use beam_body::model::{BeamBody, Formulation, Phi};
+use beam_body::scene::Scene;
+use beam_body::settings::{Key, Setting};
 use nalgebra::{Vector2, Vector3};
 use std::ffi::OsString;
 use std::io::{self, BufRead, BufWriter, Write};
@@ -19,6 +21,7 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
                 .into(),
         ));
     }
+    paper_model_only(&cli.scene)?;
     let model = BeamBody::new(cli.scene.params).map_err(|e| e.to_string())?;
     let form = cli.scene.formulation;
     let width = if form.is_dae() { 12 } else { 9 };
@@ -63,4 +66,70 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         writeln!(out, "{}", text.join(" ")).map_err(stdout_failed)?;
     }
     out.flush().map_err(stdout_failed)
+}
+
+/// The settings of the paper's model that `residual` cannot honour, with their values: it
+/// evaluates the two-coordinate equations (one element of the quadratic beam, undamped,
+/// weightless), so another beam, damping or the beam's weight would be ignored in silence.
+fn beyond_paper_model(scene: &Scene) -> Vec<String> {
+    const BEYOND: [Key; 6] = [
+        Key::NElements,
+        Key::Beam,
+        Key::DampingAlpha,
+        Key::DampingBeta,
+        Key::DampingRatio,
+        Key::BeamGravity,
+    ];
+    BEYOND
+        .into_iter()
+        .map(Setting::of)
+        .filter(|s| scene.get(s.key) != s.default)
+        .map(|s| format!("{} = {}", s.name, s.show(scene.get(s.key))))
+        .collect()
+}
+
+/// Refuses a scene that is not the paper's model, naming each setting that differs.
+fn paper_model_only(scene: &Scene) -> Result<(), Failure> {
+    let beyond = beyond_paper_model(scene);
+    if beyond.is_empty() {
+        return Ok(());
+    }
+    Err(Failure::Usage(format!(
+        "residual evaluates the paper's equations, of one element of the quadratic beam without \
+         damping or the beam's weight, and cannot take {}: leave n_elements = 1, beam = \
+         quadratic, damping_* = 0 and beam_gravity = false",
+        beyond.join(", ")
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_beyond_the_paper_model_are_named() {
+        let mut scene = Scene::default();
+        assert!(beyond_paper_model(&scene).is_empty());
+        let beyond = [("n_elements", "4"), ("beam", "exact"), ("damping_ratio", "0.01")];
+        let more = [("damping_alpha", "0.5"), ("damping_beta", "1e-3"), ("beam_gravity", "true")];
+        for (name, value) in beyond.into_iter().chain(more) {
+            scene.set_text(name, value).unwrap();
+        }
+        assert_eq!(
+            beyond_paper_model(&scene),
+            [
+                "n_elements = 4",
+                "beam = exact",
+                "damping_alpha = 0.5",
+                "damping_beta = 0.001",
+                "damping_ratio = 0.01",
+                "beam_gravity = true"
+            ]
+        );
+        // The paper's values, given explicitly, are the paper's model.
+        let mut scene = Scene::default();
+        scene.set_text("n_elements", "1").unwrap();
+        scene.set_text("beam", "quadratic").unwrap();
+        assert!(paper_model_only(&scene).is_ok());
+    }
 }
