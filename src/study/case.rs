@@ -13,7 +13,9 @@ impl Study {
         let mut values = vec![0.0; self.parameters.len()];
         for (i, p) in self.parameters.iter().enumerate().rev() {
             if let Some(n) = p.axis.grid_len() {
-                values[i] = p.axis.grid_value(grid_index % n);
+                let v = p.axis.grid_value(grid_index % n);
+                // An integer grid lands on whole numbers (checked when parsed) up to rounding.
+                values[i] = if p.is_integer() { v.round() } else { v };
                 grid_index /= n;
             }
         }

@@ -78,6 +78,38 @@ pub(super) fn check_axis_range(
     Ok(())
 }
 
+/// An integer setting's axis gives whole numbers only: a list (each value checked by
+/// [`check_axis_range`]), or a grid whose every point is one (a linear grid of whole steps,
+/// `start = 1, stop = 8, count = 8`; a log grid such as 1, 2, 4, 8). A distribution gives
+/// real numbers, and is refused.
+pub(super) fn check_integer_axis(name: &str, axis: &Axis, field: &str) -> Result<(), String> {
+    let must = format!("`{name}` must be {}", Setting::by_name(name)?.expects());
+    let how = "list its values, `values = [1, 2, 4]`, or give a grid whose every point is a \
+               whole number (start = 1, stop = 8, count = 8)";
+    let (start, stop, count, log) = match *axis {
+        Axis::Values(_) => return Ok(()),
+        Axis::Random(_) => {
+            return Err(format!("`{field}`: {must}, and a distribution gives real numbers: {how}"))
+        }
+        Axis::Grid { start, stop, count, log } => (start, stop, count, log),
+    };
+    // A linear grid's points are whole when its start and its step are; a log grid of whole
+    // numbers below 2^53 has at most 54 points (its ratio's denominator divides the start).
+    let points: Vec<u64> = if log { (0..count.min(64)).collect() } else { vec![0, 1, count - 1] };
+    let off = points
+        .into_iter()
+        .filter(|&k| k < count)
+        .map(|k| grid_point(start, stop, count, k, log))
+        .find(|x| (x - x.round()).abs() > 1e-9 * x.abs().max(1.0));
+    match off {
+        None => Ok(()),
+        Some(x) => Err(format!(
+            "`{field}`: {must}, but this grid (start = {start}, stop = {stop}, count = {count}) \
+             has the point {x}: {how}"
+        )),
+    }
+}
+
 pub(super) fn parse_axis(spec: &Table, field: &str) -> Result<Axis, String> {
     let num = |key: &str| number(spec.get(key), &format!("{field}.{key}"));
     if let Some(kind) = spec.get("distribution") {
@@ -307,6 +339,9 @@ impl Study {
                     return Err(format!("`{field}`: `{name}` is also fixed in [set]"));
                 }
                 let axis = parse_axis(sub_table(spec, &field)?, &field)?;
+                if is_integer(name) {
+                    check_integer_axis(name, &axis, &field)?;
+                }
                 check_axis_range(&base, name, &axis, &field)?;
                 parameters.push(Parameter { name: name.clone(), axis });
             }

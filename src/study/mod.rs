@@ -22,7 +22,7 @@ pub use sample::{normal_cdf, normal_quantile};
 
 use crate::model::{BeamBody, BeamN, Formulation};
 use crate::scene::locate;
-use crate::settings::{Setting, SETTINGS};
+use crate::settings::{Kind, Setting, SETTINGS};
 use crate::sim::{simulate_steps, Scene, SimError};
 use crate::solver::SolverError;
 use sample::{grid_point, latin_hypercube, name_key, open_unit};
@@ -155,6 +155,19 @@ pub struct Parameter {
     pub axis: Axis,
 }
 
+impl Parameter {
+    /// Whether the setting takes integers (`n_elements`): its values are whole numbers, and
+    /// its column is an integer column.
+    pub fn is_integer(&self) -> bool {
+        is_integer(&self.name)
+    }
+}
+
+/// Whether the setting called `name` takes integers.
+fn is_integer(name: &str) -> bool {
+    Setting::by_name(name).is_ok_and(|s| matches!(s.kind, Kind::Integer))
+}
+
 /// A study, checked: every case it names is a scene that can be set up (a case can still be
 /// invalid for reasons that depend on several values at once, such as a singular mass
 /// matrix at the start; its row says so).
@@ -209,7 +222,8 @@ impl Study {
         let mut cols = vec![("case".to_string(), ColumnType::Int)];
         cols.extend(self.parameters.iter().map(|p| {
             let unit = Setting::by_name(&p.name).ok().and_then(|s| s.unit());
-            (crate::csv::header(&p.name, unit), ColumnType::Float)
+            let ty = if p.is_integer() { ColumnType::Int } else { ColumnType::Float };
+            (crate::csv::header(&p.name, unit), ty)
         }));
         cols.extend(
             self.metrics

@@ -414,3 +414,56 @@ values = [12]
     assert!((v1_eq - v1_eq_quadratic).abs() > 2e-5, "{v1_eq} {v1_eq_quadratic}");
     assert!(exact.metrics[0].unwrap() < e, "residual below the peak");
 }
+
+/// An integer parameter (n_elements) takes whole numbers only: a distribution, or a grid with
+/// a point between two integers, is refused when the study is read (it ran and wrote "invalid"
+/// rows), naming the parameter and what it takes. A grid of whole steps, linear or log, runs
+/// each of its integers, and its column is an integer column.
+#[test]
+fn an_integer_parameter_takes_whole_numbers_and_has_an_integer_column() {
+    let allowed = "`n_elements` must be an integer in 1..=32";
+    for (axis, want) in [
+        ("distribution = \"uniform\"\nlow = 1\nhigh = 4", "a distribution gives real numbers"),
+        ("distribution = \"normal\"\nmean = 4\nsd = 1", "a distribution gives real numbers"),
+        ("distribution = \"lognormal\"\nmean = 4\nsd = 1", "a distribution gives real numbers"),
+        ("start = 1\nstop = 4\ncount = 3", "(start = 1, stop = 4, count = 3) has the point 2.5"),
+        ("start = 1.5\nstop = 4.5\ncount = 4", "has the point 1.5"),
+        ("start = 1\nstop = 32\ncount = 4\nspacing = \"log\"", "has the point 3.17"),
+    ] {
+        let sampling = if axis.starts_with("distribution") {
+            "[sampling]\nsamples = 4\nseed = 1\n"
+        } else {
+            ""
+        };
+        let text = format!("metrics = [\"max_v1\"]\n{sampling}[parameters.n_elements]\n{axis}\n");
+        let e = parse(&text).unwrap_err();
+        let line = if sampling.is_empty() { 2 } else { 5 };
+        let head = format!("line {line}: `parameters.n_elements`: {allowed}");
+        assert!(e.starts_with(&head), "{axis:?}\n  gave: {e}\n  want: {head}");
+        assert!(e.contains(want) && e.contains("`values = [1, 2, 4]`"), "{axis:?}: {e}");
+    }
+    // Out of range is the range's error, as for a list.
+    let e = parse("[parameters.n_elements]\nstart = 0\nstop = 40\ncount = 41\n").unwrap_err();
+    assert!(e.contains("`parameters.n_elements.start`: `n_elements` = 0 is out of range"), "{e}");
+
+    let grids = [
+        ("start = 1\nstop = 32\ncount = 32", (1..=32).map(f64::from).collect::<Vec<_>>()),
+        ("start = 8\nstop = 2\ncount = 4", vec![8.0, 6.0, 4.0, 2.0]),
+        (
+            "start = 1\nstop = 32\ncount = 6\nspacing = \"log\"",
+            vec![1.0, 2.0, 4.0, 8.0, 16.0, 32.0],
+        ),
+        ("start = 3\nstop = 3\ncount = 1", vec![3.0]),
+    ];
+    for (axis, want) in grids {
+        let text = format!("metrics = [\"max_v1\"]\n[parameters.n_elements]\n{axis}\n");
+        let study = parse(&text).unwrap();
+        let values: Vec<f64> = (0..study.cases()).map(|c| study.values(c)[0]).collect();
+        assert_eq!(values, want, "{axis:?}");
+    }
+    let text = "metrics = [\"max_v1\"]\n[parameters.n_elements]\nvalues = [1, 2]\n\
+                [parameters.M2]\nvalues = [12]\n";
+    let types: Vec<_> = parse(text).unwrap().columns().into_iter().map(|(_, t)| t).collect();
+    use ColumnType::{Float, Int, Text};
+    assert_eq!(types, [Int, Int, Float, Float, Text, Text, Int]);
+}

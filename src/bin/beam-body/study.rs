@@ -195,6 +195,7 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
     };
     let mut out = BufWriter::new(sink);
     let header: Vec<String> = study.columns().into_iter().map(|(name, _)| name).collect();
+    let integer: Vec<bool> = study.parameters().iter().map(|p| p.is_integer()).collect();
     let mut progress = Progress::new(n, threads, a.quiet);
     let mut counts = [0u64; 5];
     let mut line = String::new();
@@ -208,7 +209,7 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
             |row| {
                 counts[row.status as usize] += 1;
                 line.clear();
-                study_row(&mut line, &row);
+                study_row(&mut line, &row, &integer);
                 out.write_all(line.as_bytes())
             },
         )
@@ -247,13 +248,18 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
     Ok(())
 }
 
-/// One CSV row into `line`: numbers as `simulate` writes them, an empty field for a metric
-/// the run did not reach, the message quoted as RFC 4180 has it.
-fn study_row(line: &mut String, row: &Row) {
+/// One CSV row into `line`: numbers as `simulate` writes them, an integer parameter's value
+/// (where `integer[i]`) as an integer, an empty field for a metric the run did not reach, the
+/// message quoted as RFC 4180 has it.
+fn study_row(line: &mut String, row: &Row, integer: &[bool]) {
     line.push_str(&row.case.to_string());
-    for v in &row.values {
+    for (v, &int) in row.values.iter().zip(integer) {
         line.push(',');
-        csv::push_number(line, *v);
+        if int {
+            line.push_str(&(*v as i64).to_string());
+        } else {
+            csv::push_number(line, *v);
+        }
     }
     for m in &row.metrics {
         line.push(',');
