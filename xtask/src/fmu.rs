@@ -30,6 +30,8 @@
 //!    built-in law and the DefaultExperiment (`target/fmu/paper_fmu.csv`), check that a
 //!    serialized FMU state restores to a bit-identical continuation, and compare with the
 //!    standalone solver.
+//! 6. Say which platforms the archives hold and, without `--all-platforms`, which are missing
+//!    and how to build them ([`platforms_summary`]).
 
 use std::fs;
 use std::io::Write as _;
@@ -79,9 +81,8 @@ pub fn build_package_in(out_dir: &Path, all: bool) -> Result<Packages> {
     fs::create_dir_all(out_dir)
         .map_err(|err| format!("cannot create {}: {err}", relative(out_dir)))?;
     let built = platforms::build(all)?;
-    let archives: &[Archive] = if all { &platforms::ARCHIVES } else { &platforms::HOST_ARCHIVES };
     let mut listing = Vec::new();
-    for archive in archives {
+    for archive in platforms::archives(all) {
         let fmu = out_dir.join(archive.file);
         let mut binaries = Vec::new();
         for &(folder, source) in archive.binaries {
@@ -152,16 +153,68 @@ pub fn run(all: bool) -> Result {
     {
         None if rows3.len() == run.rows.len() => {
             println!("  identical to the FMI 2.0 run, bit for bit, at all {} points", rows3.len());
-            Ok(())
         }
-        k => Err(format!(
-            "the FMI 3.0 run differs from the FMI 2.0 run (same library, same core) at row {k:?} \
-             of {} against {}",
-            rows3.len(),
-            run.rows.len()
-        )
-        .into()),
+        k => {
+            return Err(format!(
+                "the FMI 3.0 run differs from the FMI 2.0 run (same library, same core) at row \
+                 {k:?} of {} against {}",
+                rows3.len(),
+                run.rows.len()
+            )
+            .into())
+        }
     }
+    println!("\n{}", platforms_summary(platforms::archives(all)));
+    Ok(())
+}
+
+/// Which platforms `archives` hold, archives that hold the same ones together; and, where
+/// some of [`platforms::PLATFORMS`] are missing (`cargo xtask fmu` builds this machine's
+/// binary only), which, and how to get them.
+fn platforms_summary(archives: &[Archive]) -> String {
+    // Each archive's platforms, in the order of PLATFORMS.
+    let held = |archive: &Archive| -> Vec<&str> {
+        let tuples: Vec<&str> =
+            archive.binaries.iter().flat_map(|(_, source)| source.platforms()).copied().collect();
+        platforms::PLATFORMS.iter().map(|(t, _)| *t).filter(|t| tuples.contains(t)).collect()
+    };
+    let mut groups: Vec<(Vec<&str>, Vec<&str>)> = Vec::new();
+    for archive in archives {
+        let platforms = held(archive);
+        match groups.iter_mut().find(|(p, _)| *p == platforms) {
+            Some((_, files)) => files.push(archive.file),
+            None => groups.push((platforms, vec![archive.file])),
+        }
+    }
+    let all = platforms::PLATFORMS.len();
+    let mut text = String::from("Platforms:");
+    for (tuples, files) in &groups {
+        let names: Vec<&str> = tuples.iter().map(|t| platforms::platform_name(t)).collect();
+        let verb = if files.len() == 1 { "holds" } else { "hold" };
+        let what = match names.len() {
+            n if n == all => format!("all {n} platforms of the README ({})", names.join(", ")),
+            1 => format!("{} only", names[0]),
+            _ => names.join(", "),
+        };
+        text.push_str(&format!("\n  {} {verb} {what}", files.join(" and ")));
+    }
+    let missing: Vec<&str> = platforms::PLATFORMS
+        .iter()
+        .filter(|(t, _)| !groups.iter().any(|(held, _)| held.contains(t)))
+        .map(|(_, name)| *name)
+        .collect();
+    if !missing.is_empty() {
+        text.push_str(&format!(
+            "\n  not built: {}: a host there finds no binary.\n  \
+             To build them: `cargo xtask fmu --all-platforms` (Debian's Rust and cross linkers,\n  \
+             installed with apt-get as root; about 2 minutes a platform), which also writes\n  \
+             {} for FMI 2.0 hosts on Linux aarch64; `cargo xtask test` builds\n  \
+             every platform too.",
+            missing.join(", "),
+            platforms::AARCH64_LINUX_FILE
+        ));
+    }
+    text
 }
 
 /// The paper's scene with the law through FMI 3.0 (fmi3EnterInitializationMode with the
@@ -548,7 +601,30 @@ fn compare(rows: &[[f64; 4]], reference: &Path, fmu_csv: &Path) -> Result {
 
 #[cfg(test)]
 mod tests {
-    use super::communication_points;
+    use super::{communication_points, platforms, platforms_summary};
+
+    /// `cargo xtask fmu` builds this machine's binary only: its summary says so, names the
+    /// platforms left out and how to get them. With `--all-platforms` it names all five.
+    #[test]
+    fn the_summary_says_which_platforms_the_archives_hold() {
+        let host = platforms::platform_name(platforms::HOST_TUPLE);
+        let text = platforms_summary(platforms::archives(false));
+        let first = format!("Platforms:\n  BeamBody.fmu and BeamBody-fmi3.fmu hold {host} only\n");
+        assert!(text.starts_with(&first), "{text}");
+        for (_, name) in platforms::PLATFORMS.iter().filter(|(_, n)| *n != host) {
+            assert!(text.contains(name), "{name}: {text}");
+        }
+        for needle in ["not built: ", "`cargo xtask fmu --all-platforms`", "`cargo xtask test`"] {
+            assert!(text.contains(needle), "{needle}: {text}");
+        }
+        let text = platforms_summary(platforms::archives(true));
+        assert_eq!(
+            text,
+            "Platforms:\n  BeamBody.fmu and BeamBody-fmi3.fmu hold all 5 platforms of the README \
+             (Linux x86-64, Windows x86-64, macOS x86-64, macOS arm64, Linux aarch64)\n  \
+             BeamBody-aarch64-linux.fmu holds Linux aarch64 only"
+        );
+    }
 
     #[test]
     fn communication_points_end_exactly_and_steps_add_up() {

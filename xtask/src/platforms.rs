@@ -204,6 +204,45 @@ pub const HOST_ARCHIVES: [Archive; 2] = [
     },
 ];
 
+/// The archives `cargo xtask fmu` writes: [`ARCHIVES`] with `--all-platforms` (`all`), else
+/// [`HOST_ARCHIVES`].
+pub fn archives(all: bool) -> &'static [Archive] {
+    if all {
+        &ARCHIVES
+    } else {
+        &HOST_ARCHIVES
+    }
+}
+
+/// The platforms the README describes, by FMI 3.0 platform tuple, with their names: those of
+/// [`FMI3_FILE`] in [`ARCHIVES`], one folder each.
+pub const PLATFORMS: [(&str, &str); 5] = [
+    ("x86_64-linux", "Linux x86-64"),
+    ("x86_64-windows", "Windows x86-64"),
+    ("x86_64-darwin", "macOS x86-64"),
+    ("aarch64-darwin", "macOS arm64"),
+    ("aarch64-linux", "Linux aarch64"),
+];
+
+/// The name of the platform of [`PLATFORMS`] with this tuple.
+pub fn platform_name(tuple: &str) -> &'static str {
+    PLATFORMS.iter().find(|(t, _)| *t == tuple).map_or("an unknown platform", |p| p.1)
+}
+
+impl Source {
+    /// The platforms (FMI 3.0 tuples) that a binary from this source runs on.
+    pub fn platforms(self) -> &'static [&'static str] {
+        match self {
+            Source::Host => std::slice::from_ref(&HOST_TUPLE),
+            Source::Cross(Cross::Win64) => &["x86_64-windows"],
+            Source::Cross(Cross::LinuxAarch64) => &["aarch64-linux"],
+            Source::Cross(Cross::MacX86_64) => &["x86_64-darwin"],
+            Source::Cross(Cross::MacArm64) => &["aarch64-darwin"],
+            Source::MacUniversal => &["x86_64-darwin", "aarch64-darwin"],
+        }
+    }
+}
+
 /// The shared-library file name in a `binaries/` folder.
 pub fn library_name(folder: &str) -> String {
     let extension = if folder.starts_with("win") || folder.ends_with("-windows") {
@@ -492,6 +531,24 @@ mod tests {
             ]
         );
         assert_eq!(HOST_ARCHIVES[1].binaries, [(HOST_TUPLE, Source::Host)]);
+    }
+
+    /// [`PLATFORMS`] are the FMI 3.0 archive's folders, in its order, and every binary of
+    /// every archive runs on some of them.
+    #[test]
+    fn the_platforms_are_the_fmi3_archive_s_folders() {
+        let fmi3 = ARCHIVES.iter().find(|a| a.file == FMI3_FILE).unwrap();
+        let folders: Vec<_> = fmi3.binaries.iter().map(|(f, _)| *f).collect();
+        let tuples: Vec<_> = PLATFORMS.iter().map(|(t, _)| *t).collect();
+        assert_eq!(folders, tuples);
+        for (folder, source) in fmi3.binaries {
+            assert_eq!(source.platforms(), [*folder], "{folder}");
+        }
+        for archive in ARCHIVES.iter().chain(&HOST_ARCHIVES) {
+            for (_, source) in archive.binaries {
+                assert!(source.platforms().iter().all(|p| tuples.contains(p)), "{source:?}");
+            }
+        }
     }
 
     #[test]
