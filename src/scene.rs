@@ -88,6 +88,8 @@ pub struct Scene {
     pub range_check: RangeCheck,
     /// What a broken energy balance does (`energy_check`: stop, warn, off).
     pub energy_check: RangeCheck,
+    /// Model Exchange's filter of a host's φ sent alone: its cut-off frequency [Hz].
+    pub phi_filter_frequency: f64,
     /// End time [s].
     pub t_end: f64,
     /// Output step [s].
@@ -123,6 +125,7 @@ impl Default for Scene {
             },
             range_check: RangeCheck::Stop,
             energy_check: RangeCheck::Stop,
+            phi_filter_frequency: 0.0,
             t_end: 10.0,
             dt_out: 0.01,
             max_rows: 1,
@@ -185,6 +188,7 @@ impl Scene {
             Key::StabilityGuard => Bool(s.stability_guard),
             Key::RangeCheck => Choice(position(&RangeCheck::ALL, &self.range_check)),
             Key::EnergyCheck => Choice(position(&RangeCheck::ALL, &self.energy_check)),
+            Key::PhiFilterFrequency => Real(self.phi_filter_frequency),
             Key::TEnd => Real(self.t_end),
             Key::DtOut => Real(self.dt_out),
             Key::MaxRows => Integer(self.max_rows as i64),
@@ -277,6 +281,7 @@ impl Scene {
             Key::StabilityGuard => s.stability_guard = flag(value),
             Key::RangeCheck => self.range_check = item(&RangeCheck::ALL, choice(value)),
             Key::EnergyCheck => self.energy_check = item(&RangeCheck::ALL, choice(value)),
+            Key::PhiFilterFrequency => self.phi_filter_frequency = real(value),
             Key::TEnd => self.t_end = real(value),
             Key::DtOut => self.dt_out = real(value),
             Key::MaxRows => self.max_rows = int(value),

@@ -198,6 +198,7 @@ pub enum Key {
     StabilityGuard,
     RangeCheck,
     EnergyCheck,
+    PhiFilterFrequency,
     TEnd,
     DtOut,
     MaxRows,
@@ -383,7 +384,7 @@ use Value::{Bool, Choice, Integer, Real};
 
 /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
 /// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 39] = [
+pub const SETTINGS: [Setting; 40] = [
     row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
     row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
     row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
@@ -663,6 +664,18 @@ pub const SETTINGS: [Setting; 39] = [
          10 %): the run is numerically unstable; stop, warn or off",
         FMU,
     ),
+    row(
+        K::PhiFilterFrequency,
+        "phi_filter_frequency",
+        real("Hz"),
+        Positive,
+        Real(PHI_FILTER_FREQUENCY),
+        "Model Exchange with phi_source = input, when the host sets phi but not dphi and \
+         ddphi: the cut-off frequency of the second-order filter whose states give phi, phi' \
+         and phi'' from phi (Modelica's Rotational.Sources.Position with exact = false); a \
+         host that sets dphi and ddphi gets them as it sends them",
+        FMU,
+    ),
     row(K::TEnd, "t_end", real("s"), Positive, Real(10.0), "End time of a CLI run", NOWHERE),
     row(
         K::DtOut,
@@ -695,6 +708,9 @@ pub const SETTINGS: [Setting; 39] = [
         flag(false, "--columns"),
     ),
 ];
+
+/// The default of `phi_filter_frequency` [Hz] (docs/fmu.md, "Model Exchange with φ alone").
+pub const PHI_FILTER_FREQUENCY: f64 = 10.0;
 
 /// The default of `max_rows`: a million rows, about 0.2 GB of CSV.
 pub const MAX_ROWS_DEFAULT: i64 = 1_000_000;

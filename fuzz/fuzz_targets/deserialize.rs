@@ -53,8 +53,8 @@ fuzz_target!(|input: &[u8]| {
     // step ends cleanly.
     if inst.state() == State::ContinuousTimeMode {
         let before = records.borrow().len();
-        // FMI 2.0's four states, or FMI 3.0's 4·n_elements.
-        let mut dx = vec![0.0; inst.number_of_continuous_states().unwrap_or(4)];
+        // FMI 2.0's six states, or FMI 3.0's 4·n_elements + 2.
+        let mut dx = vec![0.0; inst.number_of_continuous_states().unwrap_or(6)];
         let status = inst.get_derivatives(&mut dx);
         let name = match inst.api() {
             "fmi3" => "fmi3GetContinuousStateDerivatives",

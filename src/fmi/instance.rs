@@ -877,7 +877,8 @@ impl<M: Model> Instance<M> {
 
     /// GetInteger (integers and enumerations).
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Status {
-        self.get("GetInteger", BaseType::Integer, vrs, out, Value::integer)
+        // The model's integers are its settings', within their Int32 ranges.
+        self.get("GetInteger", BaseType::Integer, vrs, out, |v| v.integer() as i32)
     }
 
     /// GetBoolean.
@@ -897,7 +898,7 @@ impl<M: Model> Instance<M> {
 
     /// SetInteger (integers and enumerations).
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
-        self.set("SetInteger", BaseType::Integer, vrs, values, Value::Integer)
+        self.set("SetInteger", BaseType::Integer, vrs, values, |k: i32| Value::Integer(k.into()))
     }
 
     /// SetBoolean.

@@ -14,7 +14,9 @@ use std::fmt;
 #[derive(Clone, Copy, PartialEq)]
 pub enum Value {
     Real(f64),
-    Integer(i32),
+    /// An integer of any of the FMI types (Int32; FMI 3.0's Int64 and UInt64): each fits, so
+    /// the model sees, and names in a refusal, the value the host sent.
+    Integer(i128),
     Boolean(bool),
 }
 
@@ -39,7 +41,7 @@ impl Value {
     }
 
     /// The integer; the core has checked the base type.
-    pub fn integer(self) -> i32 {
+    pub fn integer(self) -> i128 {
         match self {
             Value::Integer(k) => k,
             _ => unreachable!("checked by type"),

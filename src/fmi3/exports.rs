@@ -375,24 +375,24 @@ values_function!(fmi3GetInt32, get_values, *mut fmi3Int32, |inst, vr, value| ins
     .get_integer(vr, value));
 values_function!(fmi3SetInt32, set_values, *const fmi3Int32, |inst, vr, value| inst
     .set_integer(vr, value));
-// The enumerations: Int64 in FMI 3.0, i32 in the core (their items are 1..=k; a value
-// beyond i32 saturates, and the model's range check refuses it naming the variable).
+// The enumerations: Int64 in FMI 3.0 (their items are 1..=k; the model's range check refuses
+// any other value, naming the variable and the value).
 values_function!(fmi3GetInt64, get_values, *mut fmi3Int64, |inst, vr, value| inst.get(
     "GetInt64",
     BaseType::Int64,
     vr,
     value,
-    |v| i64::from(v.integer())
+    |v| v.integer() as i64
 ));
 values_function!(fmi3SetInt64, set_values, *const fmi3Int64, |inst, vr, value| inst.set(
     "SetInt64",
     BaseType::Int64,
     vr,
     value,
-    |v: i64| crate::fmi::Value::Integer(v.clamp(i32::MIN as i64, i32::MAX as i64) as i32)
+    |v: i64| crate::fmi::Value::Integer(v.into())
 ));
-// The structural parameter n_elements: UInt64 in FMI 3.0 (a <Dimension> refers to one), i32
-// in the core (a value beyond saturates, and the model's range check refuses it naming it).
+// The structural parameter n_elements: UInt64 in FMI 3.0 (a <Dimension> refers to one); the
+// model's range check refuses a value beyond its range, naming it.
 values_function!(fmi3GetUInt64, get_values, *mut fmi3UInt64, |inst, vr, value| inst.get(
     "GetUInt64",
     BaseType::UInt64,
@@ -405,7 +405,7 @@ values_function!(fmi3SetUInt64, set_values, *const fmi3UInt64, |inst, vr, value|
     BaseType::UInt64,
     vr,
     value,
-    |v: u64| crate::fmi::Value::Integer(v.min(i32::MAX as u64) as i32)
+    |v: u64| crate::fmi::Value::Integer(v.into())
 ));
 values_function!(fmi3GetBoolean, get_values, *mut fmi3Boolean, |inst, vr, value| {
     // As many as nValues: the core checks that they are the value references' count.

@@ -1,6 +1,18 @@
 //! The beam–body model under Model Exchange: the host's integrator steps the equations
-//! ([`Equations`]) of the paper's coordinates, x = (v1, ϑ1, v̇1, ϑ̇1); the model gives their
-//! derivatives, the range of validity as event indicators, and the law's end as a time event.
+//! ([`Equations`]) of the model's coordinates and rates, then the two states of the filter of
+//! φ ([`PhiFilter`]): x = (q, q̇, φ_f, φ_f′). The model gives their derivatives, the range of
+//! validity as event indicators, and the law's end as a time event. A host that sets `phi`
+//! and never `dphi` or `ddphi` drives the model with the filter's φ, φ′, φ″; one that sets
+//! them, with what it sends.
+//!
+//! The filter's input is the host's φ sampled at each completed integrator step or event, and
+//! followed from one sample to the next by a ramp as long as the last interval between them
+//! (a first-order hold, one interval behind): not the input at each evaluation of the
+//! derivatives. FMPy sets a Model Exchange input inside its solver's root function, at times of
+//! the step's own choosing, so that f was not a function of (t, x), and CVode, with a filter
+//! that passes φ's changes to φ″ with a gain ω²/b, failed ("mxstep steps taken") at rtol 1e-6
+//! on the paper's scene; holding each sample instead made f jump at every sample, and CVode
+//! failed its error test at rtol 1e-8. The ramp keeps f continuous in t.
 #![forbid(unsafe_code)]
 
 use super::variables::{
@@ -8,7 +20,7 @@ use super::variables::{
 };
 use super::BeamBodyFmu;
 use crate::fmi::{self, EventInfo, Notes, Setup, StepEnd, Version};
-use crate::model::{BeamModel, Kinematics, Phi, PhiPiece, RangeCheck};
+use crate::model::{BeamModel, Kinematics, Phi, PhiFilter, PhiPiece, RangeCheck};
 use crate::sim::Equations;
 use crate::solver::RangeViolation;
 use crate::visit::StateVisitor;
@@ -18,42 +30,114 @@ use crate::visit::StateVisitor;
 #[derive(Clone, Debug)]
 pub struct Exchange {
     pub eq: Equations,
+    pub filter: PhiFilter,
     pub t: f64,
+    /// The model's states, then the filter's (φ_f, φ_f′).
     pub x: Vec<f64>,
+    /// The filter's input: a ramp to the host's last sample of φ.
+    pub ramp: Ramp,
     /// The law's end t_rot has been handled in event mode: φ holds from there on.
     pub turned: bool,
     /// `range_check` now: `warn` becomes `off` once it has warned.
     pub range: RangeCheck,
 }
 
-/// The host's φ, φ′, φ″ (phi_source = input).
-fn host(values: &super::values::Values) -> Phi {
-    Phi { phi: values.input.phi, dphi: values.rates[0], ddphi: values.rates[1] }
+/// The filter's input between the host's samples of φ: from `from` at `t0` to `to` at
+/// `t0 + len`, held after (`len` = 0: at `to` from `t0` on).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ramp {
+    pub t0: f64,
+    pub from: f64,
+    pub to: f64,
+    pub len: f64,
+}
+
+impl Ramp {
+    /// At `phi` from `t0` on.
+    pub fn at(t0: f64, phi: f64) -> Self {
+        Self { t0, from: phi, to: phi, len: 0.0 }
+    }
+
+    pub fn eval(&self, t: f64) -> f64 {
+        if self.len > 0.0 && t < self.t0 + self.len {
+            let s = ((t - self.t0) / self.len).max(0.0);
+            self.from + (self.to - self.from) * s
+        } else {
+            self.to
+        }
+    }
+
+    /// The host's sample `phi` at `t`: a ramp from where this one is now to it, as long as
+    /// the interval since the last sample (or as the last ramp, at the same time).
+    pub fn sample(&mut self, t: f64, phi: f64) {
+        let len = if t > self.t0 { t - self.t0 } else { self.len };
+        *self = Ramp { t0: t, from: self.eval(t), to: phi, len };
+    }
 }
 
 impl Exchange {
+    /// The number of the model's states (without the filter's two).
+    fn model_states(&self) -> usize {
+        self.x.len() - 2
+    }
+
+    /// The model's states.
+    pub fn model_x(&self) -> &[f64] {
+        &self.x[..self.model_states()]
+    }
+
+    /// The filter's φ, φ′, φ″ at its states for its input now.
+    pub fn filtered(&self) -> Phi {
+        let m = self.model_states();
+        self.filter.phi(self.ramp.eval(self.t), [self.x[m], self.x[m + 1]])
+    }
+
+    /// The host's φ, φ′, φ″ (phi_source = input): as it sent them, or, if it sends φ alone,
+    /// the filter's.
+    fn host(&self, values: &super::values::Values) -> Phi {
+        if values.rates_set {
+            Phi { phi: values.input.phi, dphi: values.rates[0], ddphi: values.rates[1] }
+        } else {
+            self.filtered()
+        }
+    }
+
     /// The piece of φ at the current time, the host's input being `host`.
     fn piece(&self, host: Phi) -> PhiPiece {
         self.eq.piece(self.t, self.turned, host)
     }
 
+    /// The piece of φ at the current time for the host's values.
+    fn piece_of(&self, values: &super::values::Values) -> PhiPiece {
+        self.piece(self.host(values))
+    }
+
+    /// x′ at the current time into `out`: the model's equations, and the filter's.
+    pub fn derivatives(&self, values: &super::values::Values, out: &mut [f64]) {
+        let m = self.model_states();
+        self.eq.derivatives(self.t, self.piece_of(values), self.model_x(), &mut out[..m]);
+        let f = self.filtered();
+        out[m] = f.dphi;
+        out[m + 1] = f.ddphi;
+    }
+
     /// FMI 3.0's state arrays: q (the first half of x), dq (the second), or ddq (the
     /// second half of x′).
     pub fn state_array(&self, var: Var, values: &super::values::Values) -> Vec<f64> {
-        let half = self.x.len() / 2;
+        let (m, half) = (self.model_states(), self.model_states() / 2);
         match var {
             Var::Q => self.x[..half].to_vec(),
-            Var::Dq => self.x[half..].to_vec(),
+            Var::Dq => self.x[half..m].to_vec(),
             _ => {
                 let mut dx = vec![0.0; self.x.len()];
-                self.eq.derivatives(self.t, self.piece(host(values)), &self.x, &mut dx);
-                dx.split_off(half)
+                self.derivatives(values, &mut dx);
+                dx[half..m].to_vec()
             }
         }
     }
 
     pub fn kinematics(&self, values: &super::values::Values) -> Kinematics {
-        self.eq.kinematics(self.t, self.piece(host(values)), &self.x)
+        self.eq.kinematics(self.t, self.piece_of(values), self.model_x())
     }
 
     /// Checks the range at the current state: `None` inside it (or with the check off and
@@ -64,7 +148,7 @@ impl Exchange {
     /// as past it: that is where the host's root finding puts the event, on either side.
     fn range_violation(&mut self, host: Phi, at_event: bool) -> Option<(String, bool)> {
         let check = self.range != RangeCheck::Off;
-        let v = match self.eq.check_range(self.t, self.piece(host), &self.x, check) {
+        let v = match self.eq.check_range(self.t, self.piece(host), self.model_x(), check) {
             Err(v) => v,
             Ok(()) if at_event => self.on_a_limit(host)?,
             Ok(()) => return None,
@@ -96,7 +180,7 @@ impl Exchange {
         if self.range == RangeCheck::Off || exact {
             return None;
         }
-        let (v1, theta1) = self.eq.tip(&self.x);
+        let (v1, theta1) = self.eq.tip(self.model_x());
         let l = self.eq.model().params.l;
         Some([l - v1.abs(), std::f64::consts::FRAC_PI_2 - theta1.abs()])
     }
@@ -109,7 +193,7 @@ impl Exchange {
         if on == [false, false] {
             return None;
         }
-        let k = self.eq.kinematics(self.t, self.piece(host), &self.x);
+        let k = self.eq.kinematics(self.t, self.piece(host), self.model_x());
         if on[0] && k.v1 * k.dv1 > 0.0 {
             Some(RangeViolation { name: "v1", value: k.v1, allowed: "|v1| <= l" })
         } else if on[1] && k.theta1 * k.dtheta1 > 0.0 {
@@ -121,17 +205,24 @@ impl Exchange {
 }
 
 /// FMI 2.0 Model Exchange fixes its states in the model description: the paper's two
-/// coordinates of the quadratic beam in one element (damping allowed).
+/// coordinates of the quadratic beam in one element (damping allowed), and the filter's two.
 fn check_fmi2(values: &super::values::Values) -> Result<(), String> {
     let p = &values.settings.params;
     if p.n_elements != 1 || p.beam != BeamModel::Quadratic {
+        let other = if p.beam == BeamModel::Exact {
+            format!(
+                "the exact beam's states are other coordinates (the section angles of its {} \
+                 element(s), 4·n of them)",
+                p.n_elements
+            )
+        } else {
+            format!("`n_elements` = {} would need {} of them", p.n_elements, 4 * p.n_elements)
+        };
         return Err(format!(
-            "Model Exchange runs the quadratic beam in one element: its model description \
-             declares 4 continuous states (v1, theta1, dv1, dtheta1), and `n_elements` = {} \
-             with `beam` = {} would need {}; use co-simulation for this beam",
-            p.n_elements,
-            p.beam.name(),
-            4 * p.n_elements
+            "FMI 2.0 Model Exchange runs the quadratic beam in one element: its model \
+             description declares 6 continuous states, v1, theta1, dv1, dtheta1 and the two of \
+             the filter of phi, and {other}; use FMI 3.0's Model Exchange (BeamBody-fmi3.fmu, \
+             whose states are arrays sized by n_elements) or co-simulation for this beam"
         ));
     }
     Ok(())
@@ -148,8 +239,14 @@ impl BeamBodyFmu {
             .map_err(|e| e.to_string())?;
         let turned = eq.law().is_some_and(|law| t >= law.breakpoint());
         let range = eq.range_check();
-        let mut ex = Exchange { eq, t, x: Vec::new(), turned, range };
-        ex.x = ex.eq.start(ex.piece(host(&self.values))).map_err(|e| e.to_string())?;
+        let filter = PhiFilter::new(self.values.settings.phi_filter_frequency);
+        // The filter starts at the host's φ, at rest (Modelica's initial equation).
+        let phi0 = self.values.input.phi;
+        let ramp = Ramp::at(t, phi0);
+        let mut ex = Exchange { eq, filter, t, x: vec![phi0, 0.0], ramp, turned, range };
+        let mut x = ex.eq.start(ex.piece_of(&self.values)).map_err(|e| e.to_string())?;
+        x.extend([phi0, 0.0]);
+        ex.x = x;
         Ok(ex)
     }
 
@@ -197,8 +294,17 @@ impl BeamBodyFmu {
         for x in ex.x.iter_mut() {
             v.real("exchange.x", x);
         }
+        let r = &mut ex.ramp;
+        v.real("exchange.ramp.t0", &mut r.t0);
+        v.real("exchange.ramp.from", &mut r.from);
+        v.real("exchange.ramp.to", &mut r.to);
+        v.real("exchange.ramp.len", &mut r.len);
         if ex.x.iter().any(|x| !x.is_finite()) {
             return Err("field `exchange.x` holds a non-finite state".into());
+        }
+        let r = ex.ramp;
+        if ![r.t0, r.from, r.to, r.len].iter().all(|x| x.is_finite()) || r.len < 0.0 {
+            return Err("field `exchange.ramp`: not finite, or a negative length".into());
         }
         v.flag("exchange.turned", &mut ex.turned);
         let mut warned = ex.range != ex.eq.range_check();
@@ -239,11 +345,11 @@ impl fmi::ModelExchange for BeamBodyFmu {
     fn state_count(&self) -> usize {
         match (&self.exchange, self.version) {
             (Some(ex), _) => ex.x.len(),
-            // FMI 2.0's model description: the four of `STATES` (other beams are refused at
+            // FMI 2.0's model description: the six of `STATES` (other beams are refused at
             // ExitInitializationMode, naming them).
             (None, Version::Fmi2) => STATES.len(),
-            // FMI 3.0's: q and dq, 2·n_elements each.
-            (None, Version::Fmi3) => 4 * self.values.settings.params.n_elements,
+            // FMI 3.0's: q and dq, 2·n_elements each, and the filter's two.
+            (None, Version::Fmi3) => 4 * self.values.settings.params.n_elements + 2,
         }
     }
 
@@ -253,9 +359,16 @@ impl fmi::ModelExchange for BeamBodyFmu {
                 STATES.get(k).map_or_else(|| format!("x[{k}]"), |v| format!("`{}`", v.info().name))
             }
             Version::Fmi3 => {
-                let half = fmi::ModelExchange::state_count(self) / 2;
-                let (var, j) = if k < half { ("q", k) } else { ("dq", k - half) };
-                format!("x[{k}] (`{var}` element {j})")
+                let m = fmi::ModelExchange::state_count(self) - 2;
+                let half = m / 2;
+                match k {
+                    k if k < half => format!("x[{k}] (`q` element {k})"),
+                    k if k < m => format!("x[{k}] (`dq` element {})", k - half),
+                    k => {
+                        let var = STATES3.get(2 + k - m).map_or("?", |v| v.info().name);
+                        format!("x[{k}] (`{var}`)")
+                    }
+                }
             }
         }
     }
@@ -273,8 +386,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
     }
 
     fn derivatives(&mut self, out: &mut [f64]) -> Result<(), String> {
-        let ex = self.exchange();
-        ex.eq.derivatives(ex.t, ex.piece(host(&self.values)), &ex.x, out);
+        self.exchange().derivatives(&self.values, out);
         Ok(())
     }
 
@@ -294,7 +406,10 @@ impl fmi::ModelExchange for BeamBodyFmu {
 
     fn update_discrete_states(&mut self, notes: &mut Notes) -> EventInfo {
         self.check_phi_sent(notes);
-        let host = host(&self.values);
+        let phi = self.values.input.phi;
+        let ex = self.exchange_mut();
+        ex.ramp.sample(ex.t, phi);
+        let host = self.exchange().host(&self.values);
         let ex = self.exchange_mut();
         let mut info = EventInfo::default();
         if let Some(law) = ex.eq.law().copied() {
@@ -314,8 +429,10 @@ impl fmi::ModelExchange for BeamBodyFmu {
     }
 
     fn completed_integrator_step(&mut self, notes: &mut Notes) -> Result<StepEnd, String> {
-        let host = host(&self.values);
+        let host = self.exchange().host(&self.values);
+        let phi = self.values.input.phi;
         let ex = self.exchange_mut();
+        ex.ramp.sample(ex.t, phi);
         let mut end = StepEnd::default();
         if let Some((msg, stop)) = ex.range_violation(host, false) {
             end.terminate_simulation = stop;
@@ -347,15 +464,23 @@ impl fmi::ModelExchange for BeamBodyFmu {
         };
         let inputs = [Var::Phi, Var::Dphi, Var::Ddphi];
         let nx = self.exchange().x.len();
-        // Each state variable holds nx / (number of state variables) elements.
-        let per_state = nx / states.len();
+        // Where each state variable's elements lie in x: the arrays q and dq hold a half each
+        // of the model's states, the scalars one each.
+        let n_array = (nx - 2) / 2;
+        let mut spans = Vec::with_capacity(states.len());
+        let mut at = 0;
+        for v in states {
+            let len = if v.info().dims.is_empty() { 1 } else { n_array };
+            spans.push(at..at + len);
+            at += len;
+        }
         let mut vx = vec![0.0; nx];
         let mut vu = [0.0; 3];
         let mut seeds = seed.iter();
         let mut too_few = false;
         for vr in knowns {
             if let Some(k) = states.iter().position(|v| v.vr() == *vr) {
-                for slot in &mut vx[k * per_state..(k + 1) * per_state] {
+                for slot in &mut vx[spans[k].clone()] {
                     match seeds.next() {
                         Some(s) => *slot += s,
                         None => too_few = true,
@@ -378,7 +503,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
         if too_few || seeds.next().is_some() {
             return Err(format!(
                 "{} seeds for the known value references {knowns:?}, whose elements number \
-                 otherwise (an array state counts {per_state})",
+                 otherwise (an array state counts {n_array})",
                 seed.len()
             ));
         }

@@ -35,6 +35,9 @@ use variables::{
 /// stiffest scene of the sweep (EI × 10⁷) needs about 5·10⁴ steps per simulated second.
 pub const MAX_STEPS_PER_DO_STEP: u64 = 1_000_000;
 
+/// The variables of Model Exchange's filter of φ: its states and φ″.
+const FILTERED: [Var; 3] = [Var::PhiFiltered, Var::DphiFiltered, Var::DdphiFiltered];
+
 /// Version of the model's part of a serialized state; bump it when `visit_state` changes.
 const STATE_VERSION: u32 = 7;
 
@@ -183,6 +186,15 @@ impl BeamBodyFmu {
         Ok(motion[k * n..(k + 1) * n].to_vec())
     }
 
+    /// φ, φ′ or φ″ (`k`) of Model Exchange's filter; co-simulation's applied ones.
+    fn filtered(&mut self, k: usize, setup: &Setup) -> Result<f64, String> {
+        let phi = match &self.exchange {
+            Some(ex) => ex.filtered(),
+            None => self.kinematics(setup)?.phi,
+        };
+        Ok([phi.phi, phi.dphi, phi.ddphi][k])
+    }
+
     /// The model the outputs are computed with.
     fn model(&self) -> Result<BeamBody, String> {
         match (&self.run, &self.exchange) {
@@ -319,6 +331,7 @@ impl BeamBodyFmu {
             v.real(var.name, &mut values.rates[k]);
             values::check_input(var, values.rates[k]).map_err(|e| format!("field {e}"))?;
         }
+        v.flag("rates_set", &mut values.rates_set);
         let input = &mut values.input;
         fmi::visit_optional(v, "pending_dphi_set", "pending_dphi", &mut input.dphi)?;
         fmi::visit_optional(v, "pending_ddphi_set", "pending_ddphi", &mut input.ddphi)?;
@@ -372,6 +385,9 @@ impl fmi::Model for BeamBodyFmu {
         }
         if let Some(k) = INDICATOR_VARIABLES.iter().position(|v| *v == var.var) {
             return self.range_margin(k, setup).map(Value::Real);
+        }
+        if let Some(k) = FILTERED.iter().position(|v| *v == var.var) {
+            return self.filtered(k, setup).map(Value::Real);
         }
         match self.values.get(var) {
             Some(v) => Ok(v),

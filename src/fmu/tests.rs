@@ -128,7 +128,7 @@ fn law_instance3(rtol: f64) -> (Instance, Messages) {
     let guid = super::variables::guid();
     let mut inst = crate::fmi3::instantiate("test", interface, guid, log, false, Some(cs))
         .expect("instantiates");
-    let law = |v: i64| crate::fmi::Value::Integer(v as i32);
+    let law = |v: i64| crate::fmi::Value::Integer(v.into());
     let base = crate::fmi::BaseType::Int64;
     assert_eq!(inst.set("SetInt64", base, &[Var::PhiSource.vr()], &[2i64], law), Status::Ok);
     assert_eq!(inst.enter_initialization_mode_with(Some(rtol), 0.0, Some(10.2)), Status::Ok);

@@ -18,14 +18,17 @@ pub struct Values {
     /// The inputs `dphi` and `ddphi` as the host set them last (Model Exchange's φ′, φ″;
     /// co-simulation does not use them).
     pub rates: [f64; 2],
+    /// Whether the host has set `dphi` or `ddphi`: Model Exchange then takes φ′ and φ″ from
+    /// them, else from its filter of φ.
+    pub rates_set: bool,
 }
 
 /// A setting's value as FMI has it: enumerations are 1-based.
 fn to_fmi(value: settings::Value) -> Value {
     match value {
         settings::Value::Real(x) => Value::Real(x),
-        settings::Value::Integer(k) => Value::Integer(k as i32),
-        settings::Value::Choice(k) => Value::Integer(k as i32 + 1),
+        settings::Value::Integer(k) => Value::Integer(k.into()),
+        settings::Value::Choice(k) => Value::Integer(k as i128 + 1),
         settings::Value::Bool(b) => Value::Boolean(b),
     }
 }
@@ -34,7 +37,7 @@ fn to_fmi(value: settings::Value) -> Value {
 fn from_fmi(setting: &Setting, value: Value) -> Result<settings::Value, String> {
     Ok(match (setting.kind, value) {
         (Kind::Choice(ty), Value::Integer(k)) => {
-            let n = ty.items.len() as i32;
+            let n = ty.items.len() as i128;
             if !(1..=n).contains(&k) {
                 let items: Vec<String> = ty
                     .items
@@ -50,7 +53,17 @@ fn from_fmi(setting: &Setting, value: Value) -> Result<settings::Value, String> 
             }
             settings::Value::Choice((k - 1) as usize)
         }
-        (_, Value::Integer(k)) => settings::Value::Integer(k as i64),
+        // Beyond i64, beyond every setting's range.
+        (_, Value::Integer(k)) => match i64::try_from(k) {
+            Ok(k) => settings::Value::Integer(k),
+            Err(_) => {
+                return Err(format!(
+                    "`{}` = {k} is out of range: must be {}",
+                    setting.name,
+                    setting.allowed()
+                ))
+            }
+        },
         (_, Value::Real(x)) => settings::Value::Real(x),
         (_, Value::Boolean(b)) => settings::Value::Bool(b),
     })
@@ -81,7 +94,7 @@ impl Values {
         for s in settings::SETTINGS.iter().filter(|s| s.fmu_start.is_some()) {
             settings.set(s.key, s.fmu_default()).expect("the table's start values are in range");
         }
-        Values { settings, input: Sample::value(0.0, 0.0), rates: [0.0; 2] }
+        Values { settings, input: Sample::value(0.0, 0.0), rates: [0.0; 2], rates_set: false }
     }
 
     /// Checks that `var` takes `value`; the error names the variable and the allowed range.
@@ -105,7 +118,10 @@ impl Values {
                 // `dphi` and `ddphi` are Model Exchange's; co-simulation takes derivatives
                 // through fmi2SetRealInputDerivatives only (docs/decisions.md).
                 match rate(var.var) {
-                    Some(k) => self.rates[k] = x,
+                    Some(k) => {
+                        self.rates[k] = x;
+                        self.rates_set = true;
+                    }
                     None => self.input.phi = x,
                 }
                 Ok(())

@@ -58,6 +58,7 @@ pub const UNITS: &[Unit] = &[
     unit("rad", 0, 0, 0, 1),
     unit("s", 0, 0, 1, 0),
     unit("1/s", 0, 0, -1, 0),
+    unit("Hz", 0, 0, -1, 0),
     unit("kg", 1, 0, 0, 0),
     unit("kg/m", 1, -1, 0, 0),
     unit("kg.m2", 1, 2, 0, 0),
@@ -147,6 +148,10 @@ pub enum Var {
     Dq,
     Ddq,
     EnergyCheck,
+    PhiFilterFrequency,
+    PhiFiltered,
+    DphiFiltered,
+    DdphiFiltered,
 }
 
 impl Var {
@@ -303,6 +308,22 @@ const fn derivative(
 ) -> Variable {
     let v = continuous(var, Causality::Local, name, unit, description, Some(of as u32));
     Variable { info: VarInfo { only: Only::Fmi2, ..v.info }, ..v }
+}
+
+/// A variable of Model Exchange's filter of φ ([`crate::model::PhiFilter`]): a calculated
+/// local of both versions, the derivative of `of`.
+const fn filtered(
+    var: Var,
+    of: Option<Var>,
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+) -> Variable {
+    let of = match of {
+        Some(v) => Some(v as u32),
+        None => None,
+    };
+    continuous(var, Causality::Local, name, unit, description, of)
 }
 
 /// The dimensions of a nodal array: one value per node, n_elements of them.
@@ -555,19 +576,55 @@ pub const VARIABLES: &[Variable] = &[
         Some(Var::Dq),
     ),
     param(Var::EnergyCheck, Key::EnergyCheck),
+    param(Var::PhiFilterFrequency, Key::PhiFilterFrequency),
+    filtered(
+        Var::PhiFiltered,
+        None,
+        "phi_filtered",
+        "rad",
+        "Model Exchange: the hinge angle from the filter of the input phi (a continuous state; \
+         the model's phi when the host sets phi alone, with phi_source = input); \
+         co-simulation: phi_applied",
+    ),
+    filtered(
+        Var::DphiFiltered,
+        Some(Var::PhiFiltered),
+        "dphi_filtered",
+        "rad/s",
+        "The rate of phi_filtered (a continuous state of Model Exchange; co-simulation: \
+         dphi_applied)",
+    ),
+    filtered(
+        Var::DdphiFiltered,
+        Some(Var::DphiFiltered),
+        "ddphi_filtered",
+        "rad/s2",
+        "The angular acceleration from the filter: the derivative of dphi_filtered \
+         (co-simulation: ddphi_applied)",
+    ),
 ];
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates
 /// (v1, ϑ1) and their rates. Its model description fixes them, so it runs one element of
 /// the quadratic beam (ARCHITECTURE.md, "Model Exchange").
-pub const STATES: [Var; 4] = [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1];
+/// Then the two states of the filter of φ, for a host that sends φ alone.
+pub const STATES: [Var; 6] =
+    [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1, Var::PhiFiltered, Var::DphiFiltered];
 /// Their derivatives, in the same order.
-pub const DERIVATIVES: [Var; 4] = [Var::DerV1, Var::DerTheta1, Var::DerDv1, Var::DerDtheta1];
+pub const DERIVATIVES: [Var; 6] = [
+    Var::DerV1,
+    Var::DerTheta1,
+    Var::DerDv1,
+    Var::DerDtheta1,
+    Var::DphiFiltered,
+    Var::DdphiFiltered,
+];
 /// FMI 3.0 Model Exchange's continuous states: the arrays q and dq, sized by n_elements,
 /// so that it runs any beam (ARCHITECTURE.md, "FMI 3.0").
-pub const STATES3: [Var; 2] = [Var::Q, Var::Dq];
+/// Then the filter's two, as in FMI 2.0.
+pub const STATES3: [Var; 4] = [Var::Q, Var::Dq, Var::PhiFiltered, Var::DphiFiltered];
 /// Their derivatives, in the same order.
-pub const DERIVATIVES3: [Var; 2] = [Var::Dq, Var::Ddq];
+pub const DERIVATIVES3: [Var; 4] = [Var::Dq, Var::Ddq, Var::DphiFiltered, Var::DdphiFiltered];
 /// The number of event indicators: the margins of the range of validity, l − |v1| and
 /// π/2 − |ϑ1|.
 pub const EVENT_INDICATORS: usize = 2;

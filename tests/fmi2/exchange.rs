@@ -17,6 +17,9 @@ enum Me {
 use Me::{Continuous, Error, Event, Init, Instantiated, Terminated};
 
 const ALL: [Me; 6] = [Instantiated, Init, Event, Continuous, Terminated, Error];
+/// The model description's continuous states: v1, theta1, dv1, dtheta1 and the two of the
+/// filter of phi.
+const NX: usize = 6;
 
 impl Me {
     fn fmu_name(self) -> &'static str {
@@ -60,9 +63,9 @@ impl Host {
         (status, enter, stop)
     }
 
-    fn derivatives(&self) -> (fmi2Status, [f64; 4]) {
-        let mut dx = [f64::NAN; 4];
-        let status = unsafe { fmi2GetDerivatives(self.c, dx.as_mut_ptr(), 4) };
+    fn derivatives(&self) -> (fmi2Status, [f64; NX]) {
+        let mut dx = [f64::NAN; NX];
+        let status = unsafe { fmi2GetDerivatives(self.c, dx.as_mut_ptr(), NX) };
         (status, dx)
     }
 }
@@ -125,7 +128,7 @@ fn exchange_calls() -> Vec<MeCall> {
         ("fmi2CompletedIntegratorStep", &[Continuous], |h| h.completed_step().0),
         ("fmi2SetTime", &[Event, Continuous], |h| unsafe { fmi2SetTime(h.c, 0.25) }),
         ("fmi2SetContinuousStates", &[Continuous], |h| unsafe {
-            fmi2SetContinuousStates(h.c, [0.01, 0.0, 0.0, 0.0].as_ptr(), 4)
+            fmi2SetContinuousStates(h.c, [0.01, 0.0, 0.0, 0.0, 0.0, 0.0].as_ptr(), NX)
         }),
         ("fmi2GetDerivatives", &[Event, Continuous, Terminated, Error], |h| h.derivatives().0),
         ("fmi2GetEventIndicators", &[Init, Event, Continuous, Terminated, Error], |h| {
@@ -133,15 +136,15 @@ fn exchange_calls() -> Vec<MeCall> {
             unsafe { fmi2GetEventIndicators(h.c, z.as_mut_ptr(), 2) }
         }),
         ("fmi2GetContinuousStates", &[Init, Event, Continuous, Terminated, Error], |h| {
-            let mut x = [0.0; 4];
-            unsafe { fmi2GetContinuousStates(h.c, x.as_mut_ptr(), 4) }
+            let mut x = [0.0; NX];
+            unsafe { fmi2GetContinuousStates(h.c, x.as_mut_ptr(), NX) }
         }),
         (
             "fmi2GetNominalsOfContinuousStates",
             &[Instantiated, Event, Continuous, Terminated, Error],
             |h| {
-                let mut x = [0.0; 4];
-                unsafe { fmi2GetNominalsOfContinuousStates(h.c, x.as_mut_ptr(), 4) }
+                let mut x = [0.0; NX];
+                unsafe { fmi2GetNominalsOfContinuousStates(h.c, x.as_mut_ptr(), NX) }
             },
         ),
     ]
@@ -281,13 +284,13 @@ fn co_simulation_refuses_model_exchange_functions() {
 fn model_exchange_arrays_are_checked() {
     let _g = shared();
     let h = reach(Continuous);
-    let s = unsafe { fmi2GetDerivatives(h.c, null_mut(), 4) };
+    let s = unsafe { fmi2GetDerivatives(h.c, null_mut(), NX) };
     h.expect_error(s, &["fmi2GetDerivatives", "`derivatives` is NULL"]);
-    let s = unsafe { fmi2SetContinuousStates(h.c, null(), 4) };
+    let s = unsafe { fmi2SetContinuousStates(h.c, null(), NX) };
     h.expect_error(s, &["fmi2SetContinuousStates", "`x` is NULL"]);
     let mut x = [7.0; 5];
     let s = unsafe { fmi2GetContinuousStates(h.c, x.as_mut_ptr(), 5) };
-    h.expect_error(s, &["fmi2GetContinuousStates", "nx = 5", "4"]);
+    h.expect_error(s, &["fmi2GetContinuousStates", "nx = 5", "6"]);
     assert_eq!(x, [7.0; 5]);
     let s = unsafe { fmi2GetEventIndicators(h.c, x.as_mut_ptr(), 1) };
     h.expect_error(s, &["fmi2GetEventIndicators", "ni = 1"]);
@@ -298,7 +301,8 @@ fn model_exchange_arrays_are_checked() {
     h.expect_error(s, &["fmi2CompletedIntegratorStep", "`enterEventMode` is NULL"]);
     let s = unsafe { fmi2CompletedIntegratorStep(h.c, 0, &mut enter, null_mut()) };
     h.expect_error(s, &["fmi2CompletedIntegratorStep", "`terminateSimulation` is NULL"]);
-    let s = unsafe { fmi2SetContinuousStates(h.c, [0.0, f64::INFINITY, 0.0, 0.0].as_ptr(), 4) };
+    let x = [0.0, f64::INFINITY, 0.0, 0.0, 0.0, 0.0];
+    let s = unsafe { fmi2SetContinuousStates(h.c, x.as_ptr(), NX) };
     h.expect_error(s, &["fmi2SetContinuousStates", "x[1] = inf (`theta1`)", "finite"]);
     // Zero-length arrays with NULL are fine where the count is right, and here it is not.
     let s = unsafe { fmi2GetDerivatives(h.c, null_mut(), 0) };

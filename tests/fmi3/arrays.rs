@@ -57,6 +57,14 @@ fn n_elements_is_structural_and_sizes_the_nodal_shape() {
     h.expect_error(s, &["fmi3SetFloat64", "`l`", "only the structural parameters"]);
     let s = h.set_elements(33);
     h.expect_error(s, &["fmi3SetUInt64", "n_elements", "1..=32"]);
+    // Values beyond Int32 and Int64 are named as sent (they once saturated to 2147483647).
+    for n in [(1u64 << 32) + 4, 1 << 31, u64::MAX] {
+        let s = h.set_elements(n);
+        h.expect_error(
+            s,
+            &["fmi3SetUInt64", &format!("`n_elements` = {n} is out of range"), "1..=32"],
+        );
+    }
     let s = h.enter(None);
     h.expect_error(s, &["fmi3EnterInitializationMode", "configuration mode"]);
     h.ok(h.set_elements(4));
@@ -141,19 +149,19 @@ fn a_dae_gives_q_and_dq() {
     assert!(ddq.iter().all(|x| x.is_finite() && *x != 0.0), "{ddq:?}");
 }
 
-/// Model Exchange of the beam in 3 elements: 12 states, q and dq as arrays in the order of
-/// x; integrated by RK4 through the FMI 3.0 calls, it meets FMI 3.0 co-simulation of the same
+/// Model Exchange of the beam in 3 elements: 14 states, q and dq as arrays in the order of
+/// x, then the two of the filter of φ; integrated by RK4 through the FMI 3.0 calls, it meets FMI 3.0 co-simulation of the same
 /// beam (BDF at rtol 1e-10) to the accuracy of both. The directional derivative takes and
 /// gives arrays.
 #[test]
 fn model_exchange_runs_the_beam_in_elements() {
     const N: usize = 3;
-    const NX: usize = 4 * N;
+    const NX: usize = 4 * N + 2;
     let a = Host::me("me in elements");
     a.ok(a.set_enum(Var::PhiSource, 2));
     let mut n = 0usize;
     a.ok(unsafe { fmi3GetNumberOfContinuousStates(a.c, &mut n) });
-    assert_eq!(n, 4, "one element at the start value");
+    assert_eq!(n, 6, "one element at the start value");
     a.configure(N as u64);
     a.ok(unsafe { fmi3GetNumberOfContinuousStates(a.c, &mut n) });
     assert_eq!(n, NX);
@@ -165,7 +173,7 @@ fn model_exchange_runs_the_beam_in_elements() {
     a.ok(unsafe { fmi3EnterContinuousTimeMode(a.c) });
     let mut x = [0.0; NX];
     let s = unsafe { fmi3GetContinuousStates(a.c, x.as_mut_ptr(), 4) };
-    a.expect_error(s, &["nContinuousStates = 4", "12"]);
+    a.expect_error(s, &["nContinuousStates = 4", "14"]);
     a.ok(unsafe { fmi3GetContinuousStates(a.c, x.as_mut_ptr(), NX) });
     let f = |t: f64, x: &[f64; NX]| -> [f64; NX] {
         let mut d = [0.0; NX];
@@ -192,10 +200,11 @@ fn model_exchange_runs_the_beam_in_elements() {
         a.ok(unsafe { fmi3CompletedIntegratorStep(a.c, fmi3True, &mut enter, &mut stop) });
         assert_eq!((enter, stop), (fmi3False, fmi3False));
     }
-    // q and dq are x's halves, bit for bit; the nodal shape of the quadratic beam is q.
+    // q and dq are the halves of x's model part, bit for bit; the nodal shape of the
+    // quadratic beam is q.
     let q = a.array(Var::Q, 2 * N);
     let dq = a.array(Var::Dq, 2 * N);
-    assert_eq!([q, dq].concat(), x);
+    assert_eq!([q, dq].concat(), x[..4 * N]);
     let v = a.array(Var::NodalV, N);
     assert_eq!(v, [x[0], x[2], x[4]]);
 

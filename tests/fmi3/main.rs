@@ -442,7 +442,8 @@ fn intermediate_update_mode_allows_only_its_calls() {
     }
 }
 
-/// Model Exchange: 4 states, 2 event indicators equal to the `range_margin_*` variables,
+/// Model Exchange: 6 states (the paper's four, the filter's two), 2 event indicators equal to
+/// the `range_margin_*` variables,
 /// derivatives those of FMI 2.0's Model Exchange at the same state.
 #[test]
 fn model_exchange_gives_fmi2_s_derivatives() {
@@ -451,7 +452,7 @@ fn model_exchange_gives_fmi2_s_derivatives() {
     a.ok(a.set_enum(Var::PhiSource, 2));
     let mut n = 0usize;
     a.ok(unsafe { fmi3GetNumberOfContinuousStates(a.c, &mut n) });
-    assert_eq!(n, 4);
+    assert_eq!(n, 6);
     a.ok(unsafe { fmi3GetNumberOfEventIndicators(a.c, &mut n) });
     assert_eq!(n, 2);
     a.initialize();
@@ -477,16 +478,18 @@ fn model_exchange_gives_fmi2_s_derivatives() {
         assert_eq!(f2::fmi2NewDiscreteStates(b, &mut info), OK);
         assert_eq!(f2::fmi2EnterContinuousTimeMode(b), OK);
     }
-    for (t, x) in [(0.3, [0.01, -0.02, 0.3, -0.1]), (0.6, [0.2, 0.1, -0.5, 0.4])] {
+    for (t, x) in
+        [(0.3, [0.01, -0.02, 0.3, -0.1, 0.2, 1.0]), (0.6, [0.2, 0.1, -0.5, 0.4, 0.0, 0.0])]
+    {
         a.ok(unsafe { fmi3SetTime(a.c, t) });
-        a.ok(unsafe { fmi3SetContinuousStates(a.c, x.as_ptr(), 4) });
-        let mut d3 = [0.0; 4];
-        a.ok(unsafe { fmi3GetContinuousStateDerivatives(a.c, d3.as_mut_ptr(), 4) });
-        let mut d2 = [0.0; 4];
+        a.ok(unsafe { fmi3SetContinuousStates(a.c, x.as_ptr(), 6) });
+        let mut d3 = [0.0; 6];
+        a.ok(unsafe { fmi3GetContinuousStateDerivatives(a.c, d3.as_mut_ptr(), 6) });
+        let mut d2 = [0.0; 6];
         unsafe {
             assert_eq!(f2::fmi2SetTime(b, t), OK);
-            assert_eq!(f2::fmi2SetContinuousStates(b, x.as_ptr(), 4), OK);
-            assert_eq!(f2::fmi2GetDerivatives(b, d2.as_mut_ptr(), 4), OK);
+            assert_eq!(f2::fmi2SetContinuousStates(b, x.as_ptr(), 6), OK);
+            assert_eq!(f2::fmi2GetDerivatives(b, d2.as_mut_ptr(), 6), OK);
         }
         assert_eq!(d3.map(f64::to_bits), d2.map(f64::to_bits));
         assert_eq!(d3[0], x[2]);
@@ -568,8 +571,10 @@ fn enumerations_are_int64_and_values_are_counted() {
     assert_eq!(k, 2);
     let s = unsafe { fmi3SetInt32(h.c, &vr(Var::Formulation), 1, &2, 1) };
     h.expect_error(s, &["fmi3SetInt32", "`formulation`", "an Int64 variable, not an Int32"]);
-    let s = h.set_enum(Var::Formulation, 1 << 40);
-    h.expect_error(s, &["fmi3SetInt64", "formulation"]);
+    for k in [1 << 40, i64::MIN, i64::MAX] {
+        let s = h.set_enum(Var::Formulation, k);
+        h.expect_error(s, &["fmi3SetInt64", &format!("`formulation` = {k} is out of range")]);
+    }
     let mut n = 0i32;
     h.ok(unsafe { fmi3GetInt32(h.c, &vr(Var::MaxOrder), 1, &mut n, 1) });
     assert!((1..=5).contains(&n));

@@ -8,6 +8,9 @@
 
 use super::*;
 
+/// The continuous states of one element: v1, theta1 (q), their rates (dq), the filter's two.
+const NX: usize = 6;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum St {
     // co-simulation
@@ -206,15 +209,15 @@ fn calls() -> Vec<Call> {
         ("fmi3EnterContinuousTimeMode", &[Event], |h| unsafe { fmi3EnterContinuousTimeMode(h.c) }),
         ("fmi3SetTime", &[Event, Continuous], |h| unsafe { fmi3SetTime(h.c, 0.0) }),
         ("fmi3SetContinuousStates", &[Continuous], |h| {
-            let x = [0.0; 4];
-            unsafe { fmi3SetContinuousStates(h.c, x.as_ptr(), 4) }
+            let x = [0.0; NX];
+            unsafe { fmi3SetContinuousStates(h.c, x.as_ptr(), NX) }
         }),
         (
             "fmi3GetContinuousStateDerivatives",
             &[MeInit, Event, Continuous, MeTerminated, MeError],
             |h| {
-                let mut x = [0.0; 4];
-                unsafe { fmi3GetContinuousStateDerivatives(h.c, x.as_mut_ptr(), 4) }
+                let mut x = [0.0; NX];
+                unsafe { fmi3GetContinuousStateDerivatives(h.c, x.as_mut_ptr(), NX) }
             },
         ),
         ("fmi3GetEventIndicators", &[MeInit, Event, Continuous, MeTerminated, MeError], |h| {
@@ -222,15 +225,15 @@ fn calls() -> Vec<Call> {
             unsafe { fmi3GetEventIndicators(h.c, z.as_mut_ptr(), 2) }
         }),
         ("fmi3GetContinuousStates", &[MeInit, Event, Continuous, MeTerminated, MeError], |h| {
-            let mut x = [0.0; 4];
-            unsafe { fmi3GetContinuousStates(h.c, x.as_mut_ptr(), 4) }
+            let mut x = [0.0; NX];
+            unsafe { fmi3GetContinuousStates(h.c, x.as_mut_ptr(), NX) }
         }),
         (
             "fmi3GetNominalsOfContinuousStates",
             &[MeInit, Event, Continuous, MeTerminated, MeError],
             |h| {
-                let mut x = [0.0; 4];
-                unsafe { fmi3GetNominalsOfContinuousStates(h.c, x.as_mut_ptr(), 4) }
+                let mut x = [0.0; NX];
+                unsafe { fmi3GetNominalsOfContinuousStates(h.c, x.as_mut_ptr(), NX) }
             },
         ),
         (

@@ -192,6 +192,12 @@ pub(crate) fn is_state(v: &Variable) -> bool {
     VARIABLES.iter().any(|d| d.derivative_of == Some(v.vr()) && d.only == v.only)
 }
 
+/// The 1-based `<ModelVariables>` index of the variable with value reference `vr`: FMI 2.0's
+/// list leaves out FMI 3.0's arrays, so the variables after them are not at `vr + 1`.
+pub fn index_of(vr: u32) -> usize {
+    variables(false).position(|v| v.vr() == vr).expect("a variable of FMI 2.0's list") + 1
+}
+
 fn indices(keep: impl Fn(&Variable) -> bool) -> Vec<usize> {
     variables(false).enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
 }
@@ -516,8 +522,7 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
         Type::Real { unit, start, min, max } => {
             let mut attrs = real_attrs(unit, start, min, max)?;
             if let Some(state) = v.derivative_of {
-                // The state's 1-based index in <ModelVariables>: its value reference + 1.
-                attrs.push(("derivative", (state + 1).to_string()));
+                attrs.push(("derivative", index_of(state).to_string()));
             }
             doc.empty("Real", attrs);
         }
@@ -824,9 +829,16 @@ pub(crate) mod tests {
                 Type::Real { unit, start, min, max } => {
                     assert_eq!(t.name, "Real", "{}", at("type"));
                     let a = attrs(t, &["unit", "start", "min", "max", "derivative"]);
-                    // A derivative names its state by its 1-based index, which is the
-                    // state's value reference + 1 (value references are the row index).
-                    let derivative = a.get("derivative").map(|k| k.parse::<u32>().unwrap() - 1);
+                    // A derivative names its state by its 1-based index in FMI 2.0's list,
+                    // which leaves out FMI 3.0's arrays: counted here from the file.
+                    let derivative = a.get("derivative").map(|k| {
+                        let row = k.parse::<usize>().unwrap() - 1;
+                        let state = &elements[row];
+                        let names = ["name", "valueReference", "description", "causality"];
+                        let more = ["variability", "initial"];
+                        let a = attrs(state, &[&names[..], &more[..]].concat());
+                        a["valueReference"].parse::<u32>().unwrap()
+                    });
                     assert_eq!(derivative, v.derivative_of, "{}", at("derivative"));
                     assert_eq!(a.get("unit").copied(), unit, "{}", at("unit"));
                     for (key, value) in [("start", start), ("min", min), ("max", max)] {
@@ -866,8 +878,8 @@ pub(crate) mod tests {
     }
 
     /// `<Outputs>` lists the outputs, `<Derivatives>` the state derivatives,
-    /// `<InitialUnknowns>` both (every variable with initial = calculated), each in index
-    /// order, as FMI 2.0 §2.2.8 requires.
+    /// `<InitialUnknowns>` both and the states (every variable with initial = calculated),
+    /// each in index order, as FMI 2.0 §2.2.8 requires.
     #[test]
     fn model_structure_lists_outputs_derivatives_and_initial_unknowns() {
         let root = root();
@@ -880,7 +892,12 @@ pub(crate) mod tests {
         };
         let outputs = rows(&|v| v.causality == Causality::Output);
         let derivatives = rows(&|v| v.derivative_of.is_some());
-        let unknowns = rows(&|v| v.causality == Causality::Output || v.derivative_of.is_some());
+        // The states too: the filter of φ's phi_filtered is a calculated local (the others
+        // are outputs or derivatives).
+        let is_state =
+            |v: &vars::Variable| super::variables(false).any(|d| d.derivative_of == Some(v.vr()));
+        let unknowns =
+            rows(&|v| v.causality == Causality::Output || v.derivative_of.is_some() || is_state(v));
         assert_eq!(derivatives.len(), vars::DERIVATIVES.len());
         let structure = root.child("ModelStructure").unwrap();
         let names: Vec<&str> = structure.children.iter().map(|c| c.name.as_str()).collect();

@@ -624,15 +624,17 @@ mod tests {
         assert_eq!(written, expected);
 
         // Each derivative names a state, in the order of the states: the arrays q and dq, of
-        // n_elements rows of two, so that x = (q, dq) is the model's order.
+        // n_elements rows of two, so that x = (q, dq) is the model's order, then the two
+        // scalars of the filter of φ.
         let by_vr = |vr: u32| &VARIABLES[vr as usize];
         let states: Vec<&str> =
             derivatives.iter().map(|&d| by_vr(by_vr(d).derivative_of.unwrap()).name).collect();
-        assert_eq!(states, ["q", "dq"]);
+        assert_eq!(states, ["q", "dq", "phi_filtered", "dphi_filtered"]);
         let n_elements = Dim::Param(Var::NElements.vr());
-        for &d in &derivatives {
+        for &d in &derivatives[..2] {
             assert_eq!(by_vr(d).dims, [n_elements, Dim::Fixed(2)]);
         }
+        assert!(derivatives[2..].iter().all(|&d| by_vr(d).dims.is_empty()));
         let indicator_names: Vec<&str> = indicators.iter().map(|&vr| by_vr(vr).name).collect();
         assert_eq!(indicator_names, ["range_margin_v1", "range_margin_theta1"]);
         assert!(indicators.iter().all(|vr| !unknowns.contains(vr)));

@@ -8,7 +8,9 @@
 //! fmi2NewDiscreteStates, fmi2EnterContinuousTimeMode) and CVODE restarts.
 //!
 //! The grid values are CVODE's (its interpolation), the states x = (v1, ϑ1, v̇1, ϑ̇1) that the
-//! FMU's continuous states are. fmi2CompletedIntegratorStep is not called (CVODE's normal
+//! FMU's first four continuous states are; its last two, the filter of an input φ that the law
+//! does not use, stay at rest and the host holds them there. fmi2CompletedIntegratorStep is not
+//! called (CVODE's normal
 //! mode has no hook after a step); it only checks the range of validity, which the paper's
 //! scene never leaves.
 
@@ -23,6 +25,9 @@ use super::problem::{Outcome, Problem};
 use crate::import::{Call, Common, EventFlags, Fmu2, InstanceME, ModelExchange};
 use crate::Result;
 
+/// The FMU's continuous states: the model's four and the filter's two.
+const FMU_STATES: usize = 6;
+
 /// The FMU's equations as CVODE sees them: one instance in continuous-time mode, shared by
 /// every copy (CVODE's user data holds one).
 #[derive(Clone, Copy)]
@@ -35,14 +40,15 @@ impl OdeSystem<U4> for MeSystem<'_> {
     /// recoverable failure (a smaller step).
     fn rhs(&self, t: f64, y: &Vector4<f64>) -> Vector4<f64> {
         let mut inst = self.instance.borrow_mut();
-        let mut dx = Vector4::from_element(f64::NAN);
+        let (mut x, mut dx) = ([0.0; FMU_STATES], [f64::NAN; FMU_STATES]);
+        x[..4].copy_from_slice(y.as_slice());
         let ok = inst.set_time(t).is_ok()
-            && inst.set_continuous_states(y.as_slice()).is_ok()
-            && inst.get_derivatives(dx.as_mut_slice()).is_ok();
+            && inst.set_continuous_states(&x).is_ok()
+            && inst.get_derivatives(&mut dx).is_ok();
         if !ok {
             dx.fill(f64::NAN);
         }
-        dx
+        Vector4::from_column_slice(&dx[..4])
     }
 }
 
@@ -78,8 +84,9 @@ fn solve(fmu: &Fmu2, problem: &Problem, rtol: f64) -> Result<Outcome> {
     inst.enter_initialization_mode().call("fmi2EnterInitializationMode")?;
     inst.exit_initialization_mode().call("fmi2ExitInitializationMode")?;
     event_iteration(&mut inst)?;
-    let mut x = Vector4::zeros();
-    inst.get_continuous_states(x.as_mut_slice()).call("fmi2GetContinuousStates")?;
+    let mut states = [0.0; FMU_STATES];
+    inst.get_continuous_states(&mut states).call("fmi2GetContinuousStates")?;
+    let x = Vector4::from_column_slice(&states[..4]);
     let instance = RefCell::new(inst);
     let events = RefCell::new(Vec::new());
     let t_rot = scene.law.breakpoint();

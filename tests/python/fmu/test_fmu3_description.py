@@ -20,7 +20,7 @@ from fmu_util import MODEL_DESCRIPTION3_XML
 TUPLES = {"x86_64-linux", "x86_64-windows", "x86_64-darwin", "aarch64-darwin", "aarch64-linux"}
 #: The continuous states, in the order of fmi3GetContinuousStates: the arrays q and dq, of n_elements rows of
 #: two (FMI 2.0's are the scalars v1, theta1, dv1, dtheta1). Then the event indicators.
-STATES = ["q", "dq"]
+STATES = ["q", "dq", "phi_filtered", "dphi_filtered"]
 #: FMI 3.0's own variables (arrays sized by n_elements), and FMI 2.0's (its scalar state derivatives).
 ONLY3 = ["nodal_v", "nodal_theta", "q", "dq", "ddq"]
 ONLY2 = ["der(v1)", "der(theta1)", "der(dv1)", "der(dtheta1)"]
@@ -111,12 +111,15 @@ def test_phi_is_the_one_intermediate_update_input(xml3):
 
 
 def test_states_and_event_indicators(md3):
-    # At the start value n_elements = 1: two arrays of one row of two.
-    assert md3.numberOfContinuousStates == 4
+    # At the start value n_elements = 1: two arrays of one row of two, then the two scalar states of
+    # the filter of phi.
+    assert md3.numberOfContinuousStates == 6
     assert [d.variable.derivative.name for d in md3.derivatives] == STATES
-    assert [d.variable.name for d in md3.derivatives] == ["dq", "ddq"]
+    assert [d.variable.name for d in md3.derivatives] == ["dq", "ddq", "dphi_filtered", "ddphi_filtered"]
     n_elements = next(v for v in md3.modelVariables if v.name == "n_elements")
-    for d in md3.derivatives:
+    for d in md3.derivatives[2:]:
+        assert d.variable.dimensions == [] and d.variable.derivative.dimensions == [], d.variable.name
+    for d in md3.derivatives[:2]:
         for v in (d.variable, d.variable.derivative):
             assert [dim.variable for dim in v.dimensions[:1]] == [n_elements], v.name
             assert v.shape == (1, 2), v.name

@@ -68,10 +68,12 @@ def test_capability_flags_and_default_experiment(fmu_file):
     assert me is not None and me.modelIdentifier == "BeamBody", "Model Exchange beside co-simulation"
     assert me.providesDirectionalDerivative is True and me.completedIntegratorStepNotNeeded is False
     assert md.numberOfEventIndicators == 2
-    # The states are the paper's coordinates and their rates; each derivative names its state.
+    # The states are the paper's coordinates and their rates, then the two of the filter of phi; each
+    # derivative names its state.
     states = [d.variable.derivative.name for d in md.derivatives]
-    assert states == ["v1", "theta1", "dv1", "dtheta1"], states
-    assert [d.variable.name for d in md.derivatives] == [f"der({s})" for s in states]
+    assert states == ["v1", "theta1", "dv1", "dtheta1", "phi_filtered", "dphi_filtered"], states
+    assert [d.variable.name for d in md.derivatives[:4]] == [f"der({s})" for s in states[:4]]
+    assert [d.variable.name for d in md.derivatives[4:]] == ["dphi_filtered", "ddphi_filtered"]
     cs = md.coSimulation
     assert cs is not None and cs.modelIdentifier == "BeamBody"
     flags = {
