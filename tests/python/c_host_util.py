@@ -126,7 +126,7 @@ def fmi3_summary_problems(s: dict[str, dict[str, str]], cycles: int, threads: in
     arrays = s.get("arrays", {})
     expect("arrays (n_elements, Model Exchange's n_elements and states)",
            (arrays.get("n_elements"), arrays.get("me_n_elements"), arrays.get("me_states")),
-           (str(ARRAYS_N), str(ARRAYS_N_ME), str(4 * ARRAYS_N_ME)))
+           (str(ARRAYS_N), str(ARRAYS_N_ME), str(4 * ARRAYS_N_ME + 2)))
     return problems
 
 

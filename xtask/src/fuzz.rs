@@ -270,7 +270,8 @@ fn write_state_seeds(dir: &Path) -> Result {
     ok("time", inst.set_time(0.85))?;
     inst.new_discrete_states().map_err(|s| format!("seed: fmi2NewDiscreteStates: {s:?}"))?;
     ok("continuous", inst.enter_continuous_time_mode())?;
-    ok("states", inst.set_continuous_states(&[0.3, 0.2, -1.0, 0.5]))?;
+    // The beam's four states, then the filter of φ's two.
+    ok("states", inst.set_continuous_states(&[0.3, 0.2, -1.0, 0.5, 3.1, 0.2]))?;
     seeds.push(snapshot(&mut inst)?);
     ok("terminate", inst.terminate())?;
     seeds.push(snapshot(&mut inst)?);
