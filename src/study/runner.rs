@@ -2,7 +2,7 @@
 
 use super::{Row, Status, Study};
 use std::collections::BTreeMap;
-use std::ops::Range;
+use std::ops::{ControlFlow, Range};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
@@ -14,7 +14,9 @@ const TICK: Duration = Duration::from_millis(250);
 /// Runs `cases` of `study` on `threads` threads (at least 1). `on_row` gets every row, in
 /// case order, on the calling thread; its first error stops the run (the threads finish the
 /// case in hand) and is returned. `progress` gets the number of cases done, as they finish
-/// (in any order) and at least every 250 ms.
+/// (in any order) and at least every 250 ms; when it breaks (an interrupt), no case starts
+/// any more, and the cases running finish and hand over their rows, so that the rows handed
+/// over are always those of the cases from `cases.start` up to some case, with no gap.
 ///
 /// The cases are independent and take about the same time, so each thread takes the next
 /// case number from a shared counter: no work-stealing pool is needed. A case that panics
@@ -23,7 +25,7 @@ pub fn run_cases<E>(
     study: &Study,
     cases: Range<u64>,
     threads: usize,
-    mut progress: impl FnMut(u64),
+    mut progress: impl FnMut(u64) -> ControlFlow<()>,
     mut on_row: impl FnMut(Row) -> Result<(), E>,
 ) -> Result<(), E> {
     let next = AtomicU64::new(cases.start);
@@ -52,10 +54,15 @@ pub fn run_cases<E>(
         let mut early = BTreeMap::new();
         let (mut expected, mut done) = (cases.start, 0);
         let result = loop {
-            match rx.recv_timeout(TICK) {
+            let got = rx.recv_timeout(TICK);
+            if let Ok(_) | Err(mpsc::RecvTimeoutError::Timeout) = got {
+                done += u64::from(got.is_ok());
+                if progress(done).is_break() {
+                    stop.store(true, Ordering::Relaxed);
+                }
+            }
+            match got {
                 Ok(row) => {
-                    done += 1;
-                    progress(done);
                     early.insert(row.case, row);
                     let mut failed = None;
                     while let Some(row) = early.remove(&expected) {
@@ -69,7 +76,7 @@ pub fn run_cases<E>(
                         break Err(e);
                     }
                 }
-                Err(mpsc::RecvTimeoutError::Timeout) => progress(done),
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
                 Err(mpsc::RecvTimeoutError::Disconnected) => break Ok(()),
             }
         };

@@ -1,3 +1,5 @@
+use std::ops::ControlFlow;
+
 use super::axis::lognormal_mu_sigma;
 use super::*;
 
@@ -182,7 +184,7 @@ high = 1100
         &study,
         0..10,
         3,
-        |_| {},
+        |_| ControlFlow::Continue(()),
         |r| {
             whole.push(r);
             Ok::<_, ()>(())
@@ -195,7 +197,7 @@ high = 1100
         &study,
         4..7,
         1,
-        |_| {},
+        |_| ControlFlow::Continue(()),
         |r| {
             chunk.push(r);
             Ok::<_, ()>(())
@@ -216,7 +218,7 @@ fn the_runner_stops_at_the_first_error_of_the_sink() {
         &study,
         0..6,
         2,
-        |_| {},
+        |_| ControlFlow::Continue(()),
         |_| {
             seen += 1;
             if seen == 2 {
@@ -228,6 +230,30 @@ fn the_runner_stops_at_the_first_error_of_the_sink() {
     );
     assert_eq!(result, Err("disk full"));
     assert_eq!(seen, 2);
+}
+
+/// A progress that breaks (an interrupt) starts no case more; the cases running finish, and
+/// the rows handed over are those of the first cases, with no gap.
+#[test]
+fn a_progress_that_breaks_stops_the_runner_with_no_gap_in_the_rows() {
+    // More cases than the channel holds: the workers cannot finish them all before the
+    // progress breaks, however the threads are scheduled.
+    let text = "metrics = [\"max_v1\"]\n[set]\nt_end = 0.05\n[parameters.M2]\nstart = 6\nstop = 24\ncount = 1000\n";
+    let study = parse(text).unwrap();
+    let mut rows = Vec::new();
+    let result = run_cases(
+        &study,
+        0..1000,
+        2,
+        |done| if done >= 1 { ControlFlow::Break(()) } else { ControlFlow::Continue(()) },
+        |r| {
+            rows.push(r.case);
+            Ok::<_, ()>(())
+        },
+    );
+    assert_eq!(result, Ok(()));
+    assert!(!rows.is_empty() && rows.len() < 1000, "{}", rows.len());
+    assert_eq!(rows, (0..rows.len() as u64).collect::<Vec<_>>());
 }
 
 #[test]

@@ -1,12 +1,15 @@
 //! `beam-body study`: a design study on every core, one CSV row per case.
 
 use crate::args::at_file;
-use crate::{note, print, stdout_failed, CmdResult, Failure};
+use crate::output::Output;
+use crate::progress::Progress;
+use crate::{interrupt, note, print, CmdResult, Failure};
 use beam_body::csv;
 use beam_body::study::{run_cases, Row, Status, Study};
 use lexopt::prelude::*;
 use std::ffi::OsString;
-use std::io::{self, BufWriter, IsTerminal, Write};
+use std::io::Write;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -17,7 +20,9 @@ usage: beam-body study STUDY.toml [OPTIONS] [-o OUT.csv]
 Runs a design study (README: Design studies) on every core and writes one CSV row per
 case: case, the parameters, the metrics, status, message, steps (headers name their
 units, as simulate's do). The rows go to stdout, or to OUT.csv, which appears when the
-study is done. The number of cases is stated first, on stderr.
+study is done. The number of cases is stated first, on stderr. Ctrl-C starts no case
+more, lets the cases running finish, keeps the rows (OUT.csv.partial) and names the
+--cases that go on from there.
 
 options:
   --cases A..B        run cases A..B (half-open) only
@@ -178,59 +183,65 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         note(format_args!("study: {n} cases of {total} on {threads} threads"));
     }
 
-    // The rows go to a temporary file beside OUT, renamed to OUT once all are written; into
-    // OUT directly where it exists and is not a regular file (a device, a pipe).
-    let special = |out: &String| std::fs::metadata(out).is_ok_and(|m| !m.is_file());
-    let partial = a
-        .output
-        .as_ref()
-        .filter(|out| !special(out))
-        .map(|out| format!("{out}.partial-{}", std::process::id()));
-    let sink: Box<dyn Write> = match (&partial, &a.output) {
-        (Some(path), _) | (None, Some(path)) => Box::new(
-            std::fs::File::create(path)
-                .map_err(|e| Failure::Usage(format!("cannot create {path}: {e}")))?,
-        ),
-        (None, None) => Box::new(io::stdout().lock()),
-    };
-    let mut out = BufWriter::new(sink);
+    // Everything is checked: the rows go to OUT through a temporary file (`output.rs`).
+    interrupt::install();
+    let mut out = Output::open(a.output.as_deref())?;
     let header: Vec<String> = study.columns().into_iter().map(|(name, _)| name).collect();
     let integer: Vec<bool> = study.parameters().iter().map(|p| p.is_integer()).collect();
-    let mut progress = Progress::new(n, threads, a.quiet);
+    let mut progress =
+        Progress::new(n as f64, Duration::from_secs(1), true, a.quiet, move |done, rate| {
+            format!("study: {done:.0}/{n} cases, {rate:.0} cases/s on {threads} threads")
+        });
     let mut counts = [0u64; 5];
+    let mut written = 0u64;
     let mut line = String::new();
     let start = Instant::now();
-    let result = writeln!(out, "{}", header.join(",")).and_then(|()| {
+    let result = writeln!(out.writer(), "{}", header.join(",")).and_then(|()| {
         run_cases(
             &study,
             first..end,
             threads,
-            |done| progress.update(done),
+            |done| {
+                progress.update(done as f64);
+                if interrupt::interrupted() {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            },
             |row| {
                 counts[row.status as usize] += 1;
                 line.clear();
                 study_row(&mut line, &row, &integer);
-                out.write_all(line.as_bytes())
+                written += 1;
+                // A row a case, as it comes: a case takes far longer than a write, and
+                // the file shows the study's progress.
+                let w = out.writer();
+                w.write_all(line.as_bytes()).and_then(|()| w.flush())
             },
         )
     });
-    let result = result.and_then(|()| out.flush());
-    drop(out);
     let elapsed = start.elapsed();
     progress.finish();
     if let Err(e) = result {
-        if let Some(p) = &partial {
-            let _ = std::fs::remove_file(p);
-        }
-        return Err(match &a.output {
-            None => stdout_failed(e),
-            Some(path) => Failure::Usage(format!("writing {path} failed: {e}")),
-        });
+        let failure = out.failed(e);
+        out.abandon();
+        return Err(failure);
     }
-    if let (Some(p), Some(out)) = (&partial, &a.output) {
-        std::fs::rename(p, out)
-            .map_err(|e| Failure::Usage(format!("cannot rename {p} to {out}: {e}")))?;
+    if interrupt::interrupted() && first + written < end {
+        let wrote = out.abandon();
+        let done = first + written;
+        let rest = match &a.output {
+            Some(_) => "-o REST.csv",
+            None => "> REST.csv",
+        };
+        return Err(Failure::Interrupted(format!(
+            "interrupted: the rows of cases {first}..{done} of {first}..{end} are in {wrote}; \
+             the rest: beam-body study {} --cases {done}..{end} {rest}",
+            a.file
+        )));
     }
+    out.finish()?;
     if !a.quiet {
         let secs = elapsed.as_secs_f64();
         let statuses: Vec<String> = [Status::Ok, Status::Warning, Status::Stopped]
@@ -318,56 +329,4 @@ fn plan_json(study: &Study, scene_file: Option<&Path>) -> String {
         list(study.metrics().iter().map(|m| quote(m.name())).collect()),
         list(columns)
     )
-}
-
-/// The progress line of `study` on stderr: redrawn in place on a terminal, a line every 10 s
-/// otherwise.
-struct Progress {
-    total: u64,
-    threads: usize,
-    start: Instant,
-    last: Option<Instant>,
-    every: Duration,
-    terminal: bool,
-    quiet: bool,
-}
-
-impl Progress {
-    fn new(total: u64, threads: usize, quiet: bool) -> Self {
-        let terminal = io::stderr().is_terminal();
-        let every = Duration::from_millis(if terminal { 250 } else { 10_000 });
-        Self { total, threads, start: Instant::now(), last: None, every, terminal, quiet }
-    }
-
-    fn update(&mut self, done: u64) {
-        let now = Instant::now();
-        if self.quiet || now.duration_since(self.last.unwrap_or(self.start)) < self.every {
-            return;
-        }
-        self.last = Some(now);
-        let secs = now.duration_since(self.start).as_secs_f64();
-        let rate = done as f64 / secs.max(1e-9);
-        let left = if done > 0 {
-            format!("{:.0} s left", (self.total - done) as f64 / rate)
-        } else {
-            "time left unknown".to_string()
-        };
-        let line = format!(
-            "study: {done}/{} cases  {:.0} %  {rate:.0} cases/s on {} threads  {left}",
-            self.total,
-            100.0 * done as f64 / self.total.max(1) as f64,
-            self.threads
-        );
-        if self.terminal {
-            let _ = write!(io::stderr().lock(), "\r{line}\x1b[K");
-        } else {
-            note(format_args!("{line}"));
-        }
-    }
-
-    fn finish(&self) {
-        if self.terminal && !self.quiet && self.last.is_some() {
-            note(format_args!(""));
-        }
-    }
 }

@@ -180,6 +180,50 @@ def test_an_interrupted_run_to_stdout_flushes_its_rows(beam_body):
     assert len(rows["t"]) >= 1
 
 
+STUDY = """
+metrics = ["peak_M"]
+[set]
+n_elements = 4
+beam = "exact"
+t_end = 3.0
+[parameters.M2]
+start = 6
+stop = 24
+count = 40
+"""
+
+
+def test_an_interrupted_study_keeps_its_rows_and_names_the_cases_that_go_on(beam_body, tmp_path):
+    """`study -o` left `*.partial-PID` without a word. Now Ctrl-C starts no case more, the cases running
+    finish, their rows are kept in OUT.partial with the old OUT untouched, and the message names the
+    `--cases` that go on; running them gives the rows the whole study would have."""
+    study = tmp_path / "s.toml"
+    study.write_text(STUDY)
+    out = tmp_path / "out.csv"
+    out.write_text("precious\n")
+    proc = subprocess.Popen([str(beam_body), "study", str(study), "--threads", "2", "-o", str(out)],
+                            stderr=subprocess.PIPE, text=True, cwd=REPO)
+    partial = tmp_path / f"out.csv.partial-{proc.pid}"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not partial.exists() or partial.read_text().count("\n") < 3):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    err = proc.stderr.read()
+    assert proc.wait(timeout=60) == 130, err
+    assert out.read_text() == "precious\n"
+    kept = (tmp_path / "out.csv.partial").read_text().splitlines()
+    done = len(kept) - 1
+    assert 2 <= done < 40, kept
+    assert [int(r.split(",")[0]) for r in kept[1:]] == list(range(done)), "the first cases, with no gap"
+    assert f"cases 0..{done} of 0..40" in err and f"--cases {done}..40 -o REST.csv" in err, err
+    rest = tmp_path / "rest.csv"
+    code, _, err2 = cli(beam_body, "study", study, "--cases", f"{done}..40", "-q", "-o", rest)
+    assert code == 0, err2
+    whole = tmp_path / "whole.csv"
+    assert cli(beam_body, "study", study, "-q", "-o", whole)[0] == 0
+    assert kept + rest.read_text().splitlines()[1:] == whole.read_text().splitlines()
+
+
 # ----- 7. long runs show progress on a terminal ------------------------------------------------------
 
 def test_a_long_run_shows_progress_on_a_terminal_and_none_in_a_pipe(beam_body, tmp_path):
