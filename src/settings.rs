@@ -205,6 +205,65 @@ pub enum Key {
     Columns,
 }
 
+/// The groups of settings, for the lists of the docs (`cargo xtask gen`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Group {
+    Model,
+    Law,
+    Initial,
+    Input,
+    Solver,
+    Checks,
+    Run,
+}
+
+impl Group {
+    /// Every group, in the order the docs list them.
+    pub const ALL: [Group; 7] = [
+        Group::Model,
+        Group::Law,
+        Group::Initial,
+        Group::Solver,
+        Group::Checks,
+        Group::Input,
+        Group::Run,
+    ];
+
+    /// The group's title in the docs.
+    pub const fn title(self) -> &'static str {
+        match self {
+            Group::Model => "the model",
+            Group::Law => "the law of φ (`phi_source = law`)",
+            Group::Initial => "the initial state",
+            Group::Input => "φ from a host (`phi_source = input`)",
+            Group::Solver => "the equations and the solver",
+            Group::Checks => "the checks",
+            Group::Run => "the run and its output",
+        }
+    }
+}
+
+impl Key {
+    /// The setting's group.
+    pub const fn group(self) -> Group {
+        use Key as K;
+        match self {
+            K::L | K::Ei | K::M | K::M2 | K::JC | K::R | K::G => Group::Model,
+            K::NElements | K::DampingAlpha | K::DampingBeta | K::DampingRatio => Group::Model,
+            K::Beam | K::BeamGravity => Group::Model,
+            K::TRot | K::PhiEnd | K::Phi0 => Group::Law,
+            K::V10 | K::Theta10 | K::Dv10 | K::Dtheta10 => Group::Initial,
+            K::PhiSource | K::PhiInterpolation | K::PhiExtrapolation => Group::Input,
+            K::IntermediateStep | K::InputDerivatives | K::DtComm => Group::Input,
+            K::PhiFilterFrequency => Group::Input,
+            K::Formulation | K::Rtol | K::Atol | K::MaxOrder | K::FixedStep => Group::Solver,
+            K::FixedOrder | K::StabilityGuard => Group::Solver,
+            K::RangeCheck | K::EnergyCheck => Group::Checks,
+            K::TEnd | K::DtOut | K::MaxRows | K::Columns => Group::Run,
+        }
+    }
+}
+
 /// Where a setting appears besides the scene (every setting is a scene key).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Appears {

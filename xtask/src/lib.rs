@@ -9,6 +9,7 @@
 pub mod docs;
 pub mod fmu;
 pub mod fuzz;
+pub mod generated;
 pub mod import;
 pub mod model_description;
 pub mod model_description3;

@@ -49,7 +49,7 @@ starts. A closed stdout (`| head`) stops the run at once.
 
 {}{}",
             outputs_header(),
-            options_help(true),
+            options_help(&[("-o, --output FILE", "write the CSV to FILE instead of stdout")]),
             settings_help()
         ),
         "modes" => format!(
@@ -60,7 +60,7 @@ body held at phi = 0, pi/2 and pi: the first two, or the first K (at most 2*n_el
 with --count K.
 
 {}{}",
-            options_help(false),
+            options_help(&[("--count K", "the first K modes (at most 2*n_elements)")]),
             settings_help()
         ),
         "residual" => format!(
@@ -75,7 +75,7 @@ These are the paper's equations, of one element of the quadratic beam without da
 the beam's weight: n_elements, beam, damping_* and beam_gravity other than that are refused.
 
 {}{}",
-            options_help(false),
+            options_help(&[]),
             settings_help()
         ),
         "study" => super::study::HELP.to_string(),
@@ -92,7 +92,9 @@ fn outputs_header() -> String {
     names.join(",")
 }
 
-fn options_help(output: bool) -> String {
+/// The options of a command: `--set`, the flags of the settings, then the command's `own`
+/// (flag, what it does).
+fn options_help(own: &[(&str, &str)]) -> String {
     let mut text = String::from("options:\n");
     text.push_str("  --set NAME=VALUE        set any setting below (repeatable; after the file)\n");
     for s in SETTINGS.iter() {
@@ -101,8 +103,8 @@ fn options_help(output: bool) -> String {
             text.push_str(&format!("  {left:<23} the same as --set {}=VALUE\n", s.name));
         }
     }
-    if output {
-        text.push_str("  -o, --output FILE       write the CSV to FILE instead of stdout\n");
+    for (flag, what) in own {
+        text.push_str(&format!("  {flag:<23} {what}\n"));
     }
     text.push_str("  -h, --help              this text\n\n");
     text
