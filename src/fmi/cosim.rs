@@ -173,7 +173,7 @@ impl<M: CoSimulation> Instance<M> {
     pub fn step_part(&mut self, target: f64, h: f64) -> (Status, bool) {
         let f = self.func("DoStep");
         let from = self.core.time;
-        let to = match self.core.model.intermediate_spacing() {
+        let to = match self.core.model.intermediate_spacing(self.intermediate_outputs) {
             Some(dt) if dt > 0.0 => {
                 let dt = dt.max(h / MAX_PARTS);
                 if from + 1.25 * dt < target && from + dt > from {
@@ -208,6 +208,12 @@ impl<M: CoSimulation> Instance<M> {
             Status::Ok
         });
         self.status(r)
+    }
+
+    /// Whether the model asks the host for its inputs at the intermediate points (FMI 3.0's
+    /// `intermediateVariableSetRequested`): it takes inputs between communication points.
+    pub fn intermediate_set_requested(&self) -> bool {
+        self.core.model.intermediate_spacing(false).is_some()
     }
 
     /// Back to step mode after the host's intermediate-update callback; without an input set

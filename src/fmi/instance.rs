@@ -33,7 +33,7 @@ pub type Logger = Box<dyn FnMut(Status, &str, &str)>;
 /// The host's intermediate-update callback (FMI 3.0 co-simulation), called at a time inside
 /// a step. Shared, so that the interface layer calls a clone of it with no borrow of the
 /// instance alive: the host calls back into the instance from it.
-pub type IntermediateUpdate = std::rc::Rc<dyn Fn(f64)>;
+pub type IntermediateUpdate = std::rc::Rc<dyn Fn(f64, bool)>;
 
 /// Log switches, per category of [`LOG_CATEGORIES`].
 #[derive(Clone, Copy, Debug, Default)]
@@ -95,8 +95,11 @@ pub struct Instance<M> {
     log: Logger,
     pub(crate) logging: LogFlags,
     pub(crate) core: Snapshot<M>,
-    /// The host's intermediate-update callback, when it asked to set an intermediate input.
+    /// The host's intermediate-update callback, when it asked for intermediate variables.
     intermediate_update: Option<IntermediateUpdate>,
+    /// Whether the host reads outputs in intermediate update mode (it named one in
+    /// `requiredIntermediateVariables`).
+    pub(crate) intermediate_outputs: bool,
     /// In intermediate update mode: whether the host set an input there.
     pub(crate) intermediate_set: bool,
 }
@@ -174,6 +177,7 @@ impl<M: Model> Instance<M> {
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
             core: Snapshot::new(interface, Func(api, "").version()),
             intermediate_update: None,
+            intermediate_outputs: false,
             intermediate_set: false,
         };
         inst.trace(format_args!("{func}: instance `{name}`"));
@@ -184,9 +188,11 @@ impl<M: Model> Instance<M> {
         &self.name
     }
 
-    /// Keeps the host's intermediate-update callback (FMI 3.0 co-simulation).
-    pub fn set_intermediate_update(&mut self, callback: IntermediateUpdate) {
+    /// Keeps the host's intermediate-update callback (FMI 3.0 co-simulation), through which
+    /// the host reads `outputs` or not.
+    pub fn set_intermediate_update(&mut self, callback: IntermediateUpdate, outputs: bool) {
         self.intermediate_update = Some(callback);
+        self.intermediate_outputs = outputs;
     }
 
     /// The host's intermediate-update callback, if it gave one.

@@ -126,12 +126,16 @@ pub trait Model: Clone + fmt::Debug + Sized {
     /// be set in `state`. Warnings go to `notes`.
     fn set(&mut self, vr: u32, value: Value, state: State, notes: &mut Notes)
         -> Result<(), String>;
+    /// Whether input `vr` may be set in intermediate update mode (FMI 3.0
+    /// `intermediateUpdate = "true"` on an input).
+    fn intermediate_input(vr: u32) -> bool;
+    /// Whether `vr` is marked `intermediateUpdate = "true"` (FMI 3.0), so that a host may
+    /// name it in `requiredIntermediateVariables`: an intermediate input, or an output the
+    /// model gives at any time inside a step.
+    fn intermediate_variable(vr: u32) -> bool;
     /// Leaves initialization: checks every value together and starts at `setup.start_time`,
     /// for `interface` (its own integrator for co-simulation, the equations alone for Model
     /// Exchange).
-    /// Whether input `vr` may be set in intermediate update mode (FMI 3.0
-    /// `intermediateUpdate = "true"`).
-    fn intermediate_input(vr: u32) -> bool;
     fn start(&mut self, setup: &Setup, interface: Interface) -> Result<(), String>;
 
     /// Visits the model's part of a state, after the core's: a writer reads each field, a
@@ -172,10 +176,11 @@ pub trait CoSimulation: Model {
     /// The host's intermediate-update callback set no intermediate input: the next step goes
     /// on from the inputs' samples held (the held value is not a new sample).
     fn hold_input(&mut self);
-    /// The spacing at which the model wants the host's inputs inside a communication step
-    /// (FMI 3.0's intermediate update): `None` when it takes no input between communication
-    /// points.
-    fn intermediate_spacing(&self) -> Option<f64>;
+    /// The spacing of the intermediate points inside a communication step (FMI 3.0's
+    /// intermediate update), where the host sets the model's inputs and, when it asked for
+    /// `outputs`, reads them: `None` when there are none (the model takes no input between
+    /// communication points, and the host wants no outputs there).
+    fn intermediate_spacing(&self, outputs: bool) -> Option<f64>;
 }
 
 /// A model whose equations a host integrates (FMI Model Exchange): continuous states x, their

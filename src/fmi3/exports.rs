@@ -73,15 +73,16 @@ fn host_logger(log: Option<fmi3LogMessageCallback>, env: fmi3InstanceEnvironment
     })
 }
 
-/// The host's intermediate-update callback, called with the FMU's time: the host may set
-/// the intermediate inputs and get values; the FMU never returns early.
+/// The host's intermediate-update callback, called with the FMU's time and whether the
+/// model asks for its inputs there: the host may set the intermediate inputs and get
+/// values; the FMU never returns early.
 fn host_intermediate_update(
     callback: Option<fmi3IntermediateUpdateCallback>,
     env: fmi3InstanceEnvironment,
 ) -> Option<IntermediateUpdate> {
     let callback = callback?;
     let env = env as usize;
-    Some(Rc::new(move |t: f64| {
+    Some(Rc::new(move |t: f64, set_requested: bool| {
         let mut early: fmi3Boolean = fmi3False;
         let mut early_time: fmi3Float64 = t;
         // SAFETY: the host promised a valid callback for the instance's lifetime; the two
@@ -90,7 +91,7 @@ fn host_intermediate_update(
             callback(
                 env as fmi3InstanceEnvironment,
                 t,
-                fmi3True,  // intermediateVariableSetRequested
+                fmi3Boolean::from(set_requested),
                 fmi3True,  // intermediateVariableGetAllowed
                 fmi3True,  // intermediateStepFinished
                 fmi3False, // canReturnEarly
@@ -1093,11 +1094,15 @@ pub unsafe extern "C" fn fmi3DoStep(
         if part > fmi3Warning || reached {
             return worst;
         }
-        let entered = guard(instance, F, Instance::enter_intermediate_update);
+        let mut set_requested = false;
+        let entered = guard(instance, F, |inst| {
+            set_requested = inst.intermediate_set_requested();
+            inst.enter_intermediate_update()
+        });
         if entered > fmi3Warning {
             return entered;
         }
-        callback(t);
+        callback(t, set_requested);
         let left = guard(instance, F, Instance::leave_intermediate_update);
         if left > fmi3Warning {
             return left;

@@ -18,8 +18,10 @@ pub mod exports;
 pub mod types;
 
 pub use crate::capi::{Core, Instance};
+use crate::fmi::Model as _;
 use crate::fmi::{Interface, IntermediateUpdate, Logger, Status};
 use crate::fmu::variables::{Var, VARIABLES};
+use crate::fmu::BeamBodyFmu;
 
 /// The prefix of FMI 3.0's function names, for messages.
 pub const API: &str = "fmi3";
@@ -57,21 +59,22 @@ pub fn instantiate(
             log(Status::Error, "logStatusError", &format!("fmi3InstantiateCoSimulation: {msg}"));
             return None;
         }
-        // The callback serves only a host that will set φ in it.
-        if cs.required.contains(&Var::Phi.vr()) {
-            callback = cs.intermediate_update;
+        // The callback serves a host that will set φ or read outputs in it.
+        let outputs = cs.required.iter().any(|vr| !BeamBodyFmu::intermediate_input(*vr));
+        if !cs.required.is_empty() {
+            callback = cs.intermediate_update.map(|cb| (cb, outputs));
         }
     }
     let mut inst = Instance::instantiate(API, interface, name, token, log, logging_on)?;
-    if let Some(cb) = callback {
-        inst.set_intermediate_update(cb);
+    if let Some((cb, outputs)) = callback {
+        inst.set_intermediate_update(cb, outputs);
     }
     Some(inst)
 }
 
 /// The variables a host may name in `requiredIntermediateVariables`: those marked
-/// `intermediateUpdate = "true"` (FMI 3.0 requires it), the intermediate inputs. Values of
-/// any variable can be read in intermediate update mode anyway.
+/// `intermediateUpdate = "true"` (FMI 3.0 requires it), the intermediate input `phi` and the
+/// outputs. Values of any variable can be read in intermediate update mode anyway.
 fn check_required(required: &[u32]) -> Result<(), String> {
     for vr in required {
         let Some(v) = VARIABLES.get(*vr as usize) else {
@@ -81,11 +84,11 @@ fn check_required(required: &[u32]) -> Result<(), String> {
                 VARIABLES.len()
             ));
         };
-        if !<crate::fmu::BeamBodyFmu as crate::fmi::Model>::intermediate_input(*vr) {
+        if !BeamBodyFmu::intermediate_variable(*vr) {
             let phi = Var::Phi.info().name;
             return Err(format!(
                 "requiredIntermediateVariables holds `{}` ({vr}), which is not marked \
-                 intermediateUpdate = true: only `{phi}` is",
+                 intermediateUpdate = true: only the input `{phi}` and the outputs are",
                 v.name
             ));
         }

@@ -448,6 +448,10 @@ impl fmi::Model for BeamBodyFmu {
         INTERMEDIATE_INPUTS.iter().any(|v| v.vr() == vr)
     }
 
+    fn intermediate_variable(vr: u32) -> bool {
+        VARIABLES.get(vr as usize).is_some_and(variables::intermediate_update)
+    }
+
     fn start(&mut self, setup: &Setup, interface: Interface) -> Result<(), String> {
         match interface {
             Interface::CoSimulation => {
@@ -638,7 +642,8 @@ impl fmi::CoSimulation for BeamBodyFmu {
         outputs::with_derivatives(order)
     }
 
-    /// With the host's φ: `intermediate_step`. Not the integrator's own step: each sample
+    /// With the host's φ, or for a host that reads the outputs inside a step:
+    /// `intermediate_step`. Not the integrator's own step: each sample
     /// of values only joins the pieces of φ with a jump of φ″ that may restart the
     /// integrator, whose next step is then small, so that the samples would crowd and their
     /// divided differences lose φ″ to round-off (measured: the error of v1 grew 200-fold).
@@ -646,9 +651,9 @@ impl fmi::CoSimulation for BeamBodyFmu {
         self.hold = true;
     }
 
-    fn intermediate_spacing(&self) -> Option<f64> {
+    fn intermediate_spacing(&self, outputs: bool) -> Option<f64> {
         let s = &self.values.settings;
         let dt = s.intermediate_step;
-        (s.phi_source == PhiSource::Input && dt > 0.0).then_some(dt)
+        ((outputs || s.phi_source == PhiSource::Input) && dt > 0.0).then_some(dt)
     }
 }

@@ -634,6 +634,13 @@ pub const INDICATOR_VARIABLES: [Var; EVENT_INDICATORS] =
 /// The inputs a host may set in intermediate update mode (FMI 3.0 co-simulation).
 pub const INTERMEDIATE_INPUTS: [Var; 1] = [Var::Phi];
 
+/// Whether FMI 3.0 marks `v` `intermediateUpdate = "true"`: the intermediate inputs, which a
+/// host may set in intermediate update mode, and every output, which it may read there (the
+/// model gives them at any time inside a step from its state).
+pub fn intermediate_update(v: &Variable) -> bool {
+    INTERMEDIATE_INPUTS.contains(&v.var) || v.causality == Causality::Output
+}
+
 /// FMI 3.0's own capability flags (the others are FMI 2.0's).
 pub const FMI3_CAPABILITIES: Fmi3Capabilities = Fmi3Capabilities {
     provides_intermediate_update: true,

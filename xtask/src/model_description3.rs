@@ -26,6 +26,7 @@ use beam_body::fmu::variables::{
     ENUM_TYPES, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES, INDICATOR_VARIABLES, INTERMEDIATE_INPUTS,
     UNITS,
 };
+use vars::intermediate_update;
 
 use crate::model_description::{
     boolean, check_rules, enumeration_attrs, header, initial, integer_attrs, is_initial_unknown,
@@ -225,7 +226,7 @@ fn write_variable(doc: &mut Doc, v: &Variable) -> Result {
             }
         }
     }
-    if INTERMEDIATE_INPUTS.contains(&v.var) {
+    if intermediate_update(v) {
         attrs.push(("intermediateUpdate", boolean(true)));
     }
     if let Some(initial) = initial(v.causality) {
@@ -532,7 +533,9 @@ mod tests {
             };
             assert_eq!(a["variability"], table_variability, "{}", at("variability"));
             assert_eq!(a.get("initial").copied(), initial, "{}", at("initial"));
-            let intermediate = INTERMEDIATE_INPUTS.contains(&v.var).then_some("true");
+            // The intermediate input phi, and every output (issue 43: fmusim names them all).
+            let marked = INTERMEDIATE_INPUTS.contains(&v.var) || v.causality == Causality::Output;
+            let intermediate = marked.then_some("true");
             assert_eq!(a.get("intermediateUpdate").copied(), intermediate, "{}", at("update"));
 
             match v.ty {

@@ -273,8 +273,8 @@ def test_intermediate_update_beats_values_only(fmu3_unzipdir, md3, beam_body, fm
 
 
 def test_callback_rules(fmu3_unzipdir, md3, fmu_report):
-    """An output in requiredIntermediateVariables is refused at instantiation (only phi is marked
-    intermediateUpdate). No callback when phi is not in requiredIntermediateVariables, when intermediate_step = 0, or when
+    """A parameter in requiredIntermediateVariables is refused at instantiation (phi and the outputs
+    are marked intermediateUpdate). No callback when phi is not in requiredIntermediateVariables, when intermediate_step = 0, or when
     phi comes from the law (phi_source = 2): the run is then the one without a callback, bit for bit.
     intermediate_step = 2.5 ms on h = 8.5 ms: three callbacks a step (at 2.5, 5 and 7.5 ms; the last
     part is 1 ms), at the rule's times. And eventModeUsed = true is refused at
@@ -303,9 +303,9 @@ def test_callback_rules(fmu3_unzipdir, md3, fmu_report):
     plain = run("plain")
     unlisted = run("unlisted", intermediate_update=callback, required=())
     assert not calls and np.array_equal(unlisted, plain), f"{len(calls)} callbacks without phi listed"
-    # Only variables marked intermediateUpdate may be listed (FMI 3.0): an output is refused.
+    # Only variables marked intermediateUpdate may be listed (FMI 3.0): a parameter is refused.
     with pytest.raises(Exception, match="Failed to instantiate FMU"):
-        Slave3(fmu3_unzipdir, md3, name="v1 listed", intermediate_update=callback, required=("v1",))
+        Slave3(fmu3_unzipdir, md3, name="l listed", intermediate_update=callback, required=("l",))
     never = run("intermediate_step=0", reals={"intermediate_step": 0.0}, intermediate_update=callback,
                 required=("phi",))
     assert not calls and np.array_equal(never, plain), f"{len(calls)} callbacks with intermediate_step = 0"
@@ -328,6 +328,59 @@ def test_callback_rules(fmu3_unzipdir, md3, fmu_report):
         fmu.instantiate(eventModeUsed=True, logMessage=lambda _e, st, _c, m: messages.append((st, m.decode())))
     fmu_report.note("fmi3", f"eventModeUsed = true: {messages}")
     assert any(st == 3 and "eventModeUsed = true" in m and "hasEventMode = false" in m for st, m in messages), messages
+
+
+def test_outputs_read_inside_the_step_are_the_cli_s(fmu3_unzipdir, md3, beam_body, fmu_report):
+    """A host that records every output inside the step, as fmusim's --intermediate-update does (issue 43:
+    it lists them all in requiredIntermediateVariables, and the FMU refused to instantiate): with the law,
+    the FMU calls back every intermediate_step with intermediateVariableGetAllowed, and the outputs read
+    there are the CLI's at that time (the CLI's rows every 0.5 ms, at rtol 1e-10: the same steps, the
+    same dense output), as those at the communication points are. The callbacks do not touch the
+    integrator's steps: the communication points are those of the run without them, bit for bit."""
+    n, h, rtol = 120, H0, 1e-10
+    names = [v.name for v in md3.modelVariables if v.causality == "output" and v.type == "Float64"]
+    assert {"v1", "theta1", "u2", "M", "energy"} <= set(names), names
+    seen, problems, flags, current = [], [], set(), {}
+
+    def callback(_env, t, set_requested, get_allowed, step_finished, can_return_early, _early, _early_time):
+        try:
+            flags.add((bool(set_requested), bool(get_allowed), bool(step_finished), bool(can_return_early)))
+            seen.append([t] + current["slave"].get(STATES + ("M",)))
+        except Exception as e:  # noqa: BLE001 (ctypes would swallow it)
+            problems.append(f"at t = {t!r}: {e!r}")
+
+    def run(name, **kw):
+        s = current["slave"] = Slave3(fmu3_unzipdir, md3, name=name, **kw)
+        try:
+            s.start(tolerance=rtol, stop_time=T_END, int64={"phi_source": PHI_SOURCE_LAW})
+            rows = []
+            for k in range(n):
+                s.step_input(k * h, h)
+                rows.append([(k + 1) * h] + s.get(STATES + ("M",)))
+            assert not s.errors(1), s.errors(1)
+            return np.array(rows)
+        finally:
+            s.free()
+
+    plain = run("outputs-plain")
+    listed = run("outputs-listed", intermediate_update=callback, required=tuple(names))
+    assert not problems, problems[:5]
+    expected = predicted_callbacks([(k * h, h) for k in range(n)])
+    inside = np.array(seen)
+    assert len(inside) == len(expected) and np.array_equal(inside[:, 0], expected), (len(inside), len(expected))
+    assert flags == {(False, True, True, False)}, flags
+    ref = cli(beam_body, dt_out=0.0005, t_end=round(n * h, 10), rtol=rtol)
+    worst = {}
+    for q, col in zip(STATES + ("M",), range(1, 5)):
+        at = np.interp(inside[:, 0], ref["t"], ref[q])
+        on_grid = np.abs(np.round(inside[:, 0] / 0.0005) * 0.0005 - inside[:, 0]).max()
+        assert on_grid < 1e-12, on_grid
+        scale = float(np.max(np.abs(ref[q])))
+        worst[q] = float(np.max(np.abs(inside[:, col] - at))) / scale
+        fmu_report.figure("fmi3 outputs in intermediate update", f"max|{q} - CLI| / max|{q}|", worst[q],
+                          f"{len(inside)} callbacks over {n * h:g} s")
+    assert max(worst.values()) < 1e-12, worst  # measured 1.1e-15 (M), the CLI's own steps
+    assert np.array_equal(listed, plain), float(np.max(np.abs(listed - plain)))
 
 
 # --------------------------------------------------------------------------------------------------

@@ -102,10 +102,16 @@ def test_time_is_the_independent_variable(md3):
     assert time.declaredType.name == "s" and time.declaredType.unit == "s"
 
 
-def test_phi_is_the_one_intermediate_update_input(xml3):
+def test_phi_and_the_outputs_are_marked_intermediate_update(xml3):
+    """phi, the one input a host may set inside a step, and every output, which it may read there
+    (issue 43: fmusim's --intermediate-update lists every output it records, and FMI 3.0 lets a host
+    list only variables so marked). Nothing else: no parameter, no other input, no local."""
     variables = list(xml3.find("ModelVariables"))
     marked = [v.get("name") for v in variables if v.get("intermediateUpdate") == "true"]
-    assert marked == ["phi"]
+    inputs = [v.get("name") for v in variables if v.get("causality") == "input"]
+    outputs = [v.get("name") for v in variables if v.get("causality") == "output"]
+    assert "phi" in inputs and len(inputs) > 1 and len(outputs) >= 14, (inputs, outputs)
+    assert marked == ["phi"] + outputs, sorted(set(marked) ^ set(["phi"] + outputs))
     phi = next(v for v in variables if v.get("name") == "phi")
     assert phi.tag == "Float64" and phi.get("causality") == "input"
 
