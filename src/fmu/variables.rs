@@ -21,11 +21,13 @@ use std::sync::OnceLock;
 /// standard names).
 pub const MODEL_IDENTIFIER: &str = "BeamBody";
 pub const MODEL_NAME: &str = "BeamBody";
-pub const MODEL_DESCRIPTION: &str = "Inextensible elastic cantilever beam (Ritz, 2 coordinates) \
-with a heavy rigid body hinged at its tip and turned through a large angle phi(t); \
-Russkikh & Shklyarchuk (2020). The paper's three formulations: constraints exact (eq. 15), DAE \
-with the inextensibility constraint (eq. 20-21), linearised (eq. 16); and the DAE projected onto \
-the constraint.";
+pub const MODEL_DESCRIPTION: &str = "Inextensible elastic cantilever beam with a heavy rigid body \
+hinged at its tip and turned through a large angle phi(t); Russkikh & Shklyarchuk (2020). The beam \
+by Ritz in n_elements cubic Hermite elements (1, the default, is the paper's model: 2 coordinates), \
+its geometric nonlinearity cut at second order as in the paper (beam = quadratic) or kept whole \
+(beam = exact, the inextensible elastica). The quadratic beam in four formulations: the paper's \
+three, constraints exact (eq. 15), DAE with the inextensibility constraint (eq. 20-21) and \
+linearised (eq. 16), and the DAE projected onto the constraint.";
 /// `version`: the crate's version (Cargo.toml). Not part of the GUID, which names the
 /// interface: a release that changes no variable keeps it.
 pub const MODEL_VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -167,14 +167,23 @@ pub fn index_html() -> String {
         h,
         "<p>An inextensible elastic cantilever beam (length <code>l</code>, bending stiffness \
          <code>EI</code>, mass per unit length <code>m</code>), clamped at one end and \
-         discretised by Ritz with one cubic Hermite element, whose two coordinates are the tip \
-         deflection <code>v1</code> and the rotation <code>theta1</code> of the tip section. A \
+         discretised by Ritz with <code>n_elements</code> cubic Hermite elements: one by \
+         default, the paper's model, whose two coordinates are the tip deflection \
+         <code>v1</code> and the rotation <code>theta1</code> of the tip section; up to 32, with \
+         two coordinates a node. <code>beam</code> chooses the beam theory: \
+         <code>quadratic</code>, the paper's, keeps the geometric nonlinearity to second order \
+         and holds while <code>|theta1|</code> stays within pi/2; <code>exact</code> is the \
+         inextensible elastica, valid at any rotation, whose coordinates are the section angles. \
+         Co-simulation runs every beam; Model Exchange runs n elements and the exact beam \
+         in FMI 3.0 (states as arrays sized by <code>n_elements</code>), the paper's model \
+         only in FMI 2.0, whose states are fixed. A \
          heavy rigid body (mass <code>M2</code>, moment of inertia <code>J_C</code> about its \
          centre of mass, which lies at distance <code>r</code> from the hinge) is hinged at the \
          tip and turned through a large prescribed angle <code>phi(t)</code> relative to the \
-         tip section; gravity <code>g</code> acts along the undeformed beam axis. \
-         Inextensibility makes the tip's axial displacement quadratic in <code>v1</code> and \
-         <code>theta1</code>, which keeps the vibrations' geometric nonlinearity. The FMU \
+         tip section; gravity <code>g</code> acts along the undeformed beam axis. In the \
+         quadratic beam inextensibility makes the tip's axial displacement quadratic in \
+         <code>v1</code> and <code>theta1</code>, which keeps the vibrations' geometric \
+         nonlinearity. The FMU \
          integrates the equations of motion with its own variable-order BDF and reports the \
          motion, the hinge reactions <code>N</code>, <code>P</code>, <code>M</code> and the \
          energy. Model and example (the default parameters and turn) are those of \

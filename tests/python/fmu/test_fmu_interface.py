@@ -98,3 +98,28 @@ def test_capability_flags_and_default_experiment(fmu_file):
     assert [i.value for i in by_name["formulation"].declaredType.items] == ["1", "2", "3", "4"]
     assert [i.name for i in by_name["phi_source"].declaredType.items] == ["input", "law"]
     assert by_name["phi_source"].start == "1" and by_name["phi_extrapolation"].start == "3"
+
+
+NUMBER_WORDS = {2: "two", 3: "three", 4: "four", 5: "five", 6: "six"}
+
+
+@pytest.mark.parametrize("which", ["fmi2", "fmi3"])
+def test_description_names_every_beam_and_formulation(which, fmu_file, fmu3_file):
+    """Both FMUs' description and documentation say what the FMU holds (issue 43: both still read "Ritz,
+    2 coordinates ... three formulations" after n elements, the exact beam and a fourth formulation
+    came): n_elements, both beam theories by their values, and as many formulations as the description's
+    own enumeration lists."""
+    path = fmu_file if which == "fmi2" else fmu3_file
+    md = read_model_description(str(path))
+    text = md.description
+    formulations = next(t for t in md.typeDefinitions if t.name == "Formulation").items
+    beams = [i.name for i in next(t for t in md.typeDefinitions if t.name == "Beam").items]
+    assert beams == ["quadratic", "exact"], beams
+    assert "n_elements" in text and "beam = quadratic" in text and "beam = exact" in text, text
+    assert f"{NUMBER_WORDS[len(formulations)]} formulations" in text, (len(formulations), text)
+    assert "2 coordinates)" not in text.split("n_elements")[0], text
+    with zipfile.ZipFile(path) as z:
+        html = z.read("documentation/index.html").decode("utf-8")
+    model = html.split("<h2>The model</h2>", 1)[1].split("<h2>", 1)[0]
+    for needle in ("<code>n_elements</code>", "<code>exact</code>", "<code>quadratic</code>"):
+        assert needle in model, f"documentation/index.html's model section lacks {needle}"
