@@ -99,3 +99,17 @@ def test_readme_exact_beam_blocks_give_the_cli_s_beam(tmp_path, beam_body, fmu_r
     fmu_report.figure("README", f"block {k + 1}: max|v1 - CLI exact n=4|", d, f"over {t_end} s")
     assert d <= tol, f"README block {k + 1}: |v1 - the CLI's| = {d:.3e} > {tol:g}"
     assert np.max(np.abs(v1)) > 0.3, "the body turned and the beam bent"
+
+
+def test_the_readme_is_a_front_page():
+    """A newcomer's front page (issue 43: the opening was dense and cited issue numbers): at most 250
+    lines, no issue numbers (the history is in docs/), and in its first screen a one-line CLI run of the
+    exact beam in n elements and the FMPy value that selects it."""
+    text = (REPO / "README.md").read_text(encoding="utf-8")
+    lines = text.splitlines()
+    assert len(lines) <= 250, f"README.md has {len(lines)} lines"
+    cited = re.findall(r"(?i)\bissues?\s+#?\d+", text)
+    assert not cited, cited
+    first_screen = "\n".join(lines[:40])
+    assert re.search(r"beam-body simulate \S+ .*--beam exact --elements \d", first_screen), first_screen
+    assert '"beam": 2' in text
