@@ -54,7 +54,7 @@ pub fn instance3(interface: Interface) -> (Instance, Records) {
     let cs = (interface == Interface::CoSimulation).then(|| fmi3::CoSimulationArgs {
         event_mode_used: false,
         required: std::slice::from_ref(&phi),
-        intermediate_update: Some(Rc::new(|_| {})),
+        intermediate_update: Some(Rc::new(|_, _| {})),
     });
     let inst = fmi3::instantiate("fuzz", interface, guid(), logger, false, cs)
         .expect("a valid instantiation");
