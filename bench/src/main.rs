@@ -44,6 +44,7 @@ fn main() -> ExitCode {
         "sweep-case" => sweep::run_case(options),
         "figures" => no_options(command, options).and_then(|()| figures::run()),
         "profile" => no_options(command, options).and_then(|()| profile::run()),
+        "cvode-lib" => no_options(command, options).and_then(|()| bench::print_cvode_lib()),
         other => Err(format!("unknown command `{other}`; run `cargo xtask help`").into()),
     };
     match result {

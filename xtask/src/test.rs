@@ -43,6 +43,7 @@ pub fn run(scope: Scope) -> Result {
     let fmi_sim = report.step("fmi-sim (rust-fmi's host)", crate::tools::ensure_fmi_sim);
     if scope == Scope::All {
         report.step("rust tests", rust_tests);
+        report.step("rust tests against CVODE", cvode_tests);
         report.step("rust tests (aarch64, qemu)", crate::platforms::test_linux_aarch64);
         // The sweep's representative subset: every row must end as expected (ok within its
         // error bound, or stopped with the expected message).
@@ -74,6 +75,27 @@ fn rust_tests() -> Result {
         eprintln!("cargo-nextest is not installed; using cargo test");
         run_cmd(&mut cargo(["test", "--workspace", "--release"]))
     }
+}
+
+/// The benchmark crate's tests that compare with CVODE (ignored by a plain `cargo test`,
+/// which reports them so): CVODE built from source as the benchmark builds it, then every
+/// ignored test of the crate run with `BEAM_BODY_CVODE_LIB` naming it. A library that cannot
+/// be built fails the step.
+fn cvode_tests() -> Result {
+    let mut build =
+        cargo(["run", "--quiet", "--release", "-p", "beam-body-bench", "--", "cvode-lib"]);
+    eprintln!("$ {}", crate::display(&build));
+    let out = build.stderr(Stdio::inherit()).output()?;
+    if !out.status.success() {
+        return Err(format!("building CVODE failed ({})", out.status).into());
+    }
+    let lib = String::from_utf8(out.stdout)?.trim().to_string();
+    let mut tests = if nextest_available() {
+        cargo(["nextest", "run", "-p", "beam-body-bench", "--release", "--run-ignored", "only"])
+    } else {
+        cargo(["test", "-p", "beam-body-bench", "--release", "--", "--ignored"])
+    };
+    run_cmd(tests.env("BEAM_BODY_CVODE_LIB", lib))
 }
 
 fn nextest_available() -> bool {

@@ -459,6 +459,14 @@ pub(crate) fn optimized_cvode() -> Option<PathBuf> {
     }
 }
 
+/// `cvode-lib`: builds the optimised CVODE (or finds it built) and prints its path, for
+/// `cargo xtask test`, which runs the tests that need it with `BEAM_BODY_CVODE_LIB` set.
+pub fn print_cvode_lib() -> Result {
+    let lib = sundials_build::ensure_optimized_cvode(&target_dir())?;
+    println!("{}", lib.display());
+    Ok(())
+}
+
 // ---------------------------------------------------------------------------------------
 // `bench-run --round K`.
 
