@@ -8,6 +8,7 @@ mod arrays;
 #[allow(unused_imports)]
 #[path = "../common/mod.rs"]
 mod common;
+mod fuzz_regressions;
 mod misuse;
 
 use beam_body::fmi3::exports::*;
