@@ -455,10 +455,12 @@ mod tests {
         assert!((t - 0.23).abs() < 1e-12 && (v - 2.0).abs() < 1e-12, "{t} {v}");
     }
 
-    /// The claims about Fig. 3 that the README quotes, on the grid and tolerance that
-    /// `cargo xtask figures` uses.
+    /// A change detector: the extremes of Fig. 3 as this code computed them once, on the grid
+    /// and tolerance that `cargo xtask figures` uses. The same extremes are checked against
+    /// the oracle's scipy reference, which shares no code with this, in
+    /// tests/python/oracle/test_oracle_paper.py (`test_figure3_extremes_against_the_reference`).
     #[test]
-    fn figure3_claims() {
+    fn figure3_claims_change_detector() {
         let fig = compute(&paper_scene().unwrap()).unwrap();
         let m = fig.measures();
         m.check().unwrap();

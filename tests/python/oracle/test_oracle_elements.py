@@ -48,13 +48,6 @@ def random_states(rng, n, count, scale_q=0.2):
 # --------------------------------------------------------------------------------------------------
 
 
-def test_law_and_defaults_are_oracles():
-    assert on.DEFAULT_PARAMS == oracle.DEFAULT_PARAMS
-    tt = np.linspace(-0.1, 2.0, 333)
-    for a, b in zip(on.phi_law(tt), oracle.phi_law(tt)):
-        assert np.allclose(a, b, rtol=0, atol=1e-13)
-
-
 OTHER_PARAMS = {"l": 1.7, "EI": 350.0, "m": 3.1, "M2": 25.0, "J_C": 0.4, "r": 0.9, "g": 9.81}
 
 

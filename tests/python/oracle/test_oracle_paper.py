@@ -88,10 +88,28 @@ def simulate(beam_body, scene_file, formulation, extra=()):
 # --------------------------------------------------------------------------------------------------
 
 
-def test_paper_scene_is_the_papers_example(paper_scene_file):
-    s = scene_values(paper_scene_file)
+def cli_defaults(beam_body) -> dict:
+    """The CLI's default of every numeric setting, as `beam-body simulate --help` states it."""
+    import re
+    import subprocess
+
+    text = subprocess.run([str(beam_body), "simulate", "--help"], capture_output=True, text=True, check=True,
+                          timeout=60).stdout
+    found = re.findall(r"^  (\w+)(?: \[[^\]]*\])? = (-?[0-9.eE+-]+)\s", text, re.M)
+    return {k: float(v) for k, v in found}
+
+
+def test_paper_scene_is_the_papers_example(beam_body, paper_scene_file):
+    """What the CLI runs for scenes/paper.toml (its own defaults, then the file's keys) is the paper's
+    example as paper_example.py states it from the paper (model-notes.md). The defaults come from the
+    binary, so a default that drifted from the paper fails here (the oracle's own defaults used to fill
+    the keys the file leaves out, which could not fail)."""
+    defaults = cli_defaults(beam_body)
+    assert {"l", "EI", "M2", "t_rot", "phi_end", "phi0"} <= set(defaults), sorted(defaults)
+    runs = {**defaults, **{k: float(v) for k, v in load_toml(paper_scene_file).items() if k in PAPER_EXAMPLE}}
     for k, v in PAPER_EXAMPLE.items():
-        assert s[k] == pytest.approx(v, rel=1e-12, abs=1e-15), f"scenes/paper.toml: {k} = {s[k]}, paper: {v}"
+        assert k in runs, f"the CLI states no default for {k}"
+        assert runs[k] == pytest.approx(v, rel=1e-12, abs=1e-15), f"the CLI runs {k} = {runs[k]}, paper: {v}"
 
 
 @pytest.mark.parametrize("name", ["reduced", "linear"])
@@ -109,6 +127,30 @@ def test_reference_methods_agree(name):
     assert np.all(np.isfinite(a)) and np.all(np.isfinite(b))
     assert d[0] <= METHOD_AGREEMENT and d[1] <= METHOD_AGREEMENT, msg
     write_report(f"scipy-{name}", f"# scipy-{name} dop853_vs_radau max_diff_v1={d[0]:.3e} max_diff_theta1={d[1]:.3e}")
+
+
+# The extremes of the paper's Fig. 3 (reduced, eq. 15) that bench/src/figures.rs's change detector
+# (figure3_claims_change_detector) holds the CLI's figure to: (tau = t/T, value) of max |.|.
+FIGURE3_EXTREMES = {"v1": (7.19, -0.5907), "theta1": (7.19, -0.4074), "u2": (7.19, -0.0873)}
+
+
+def test_figure3_extremes_against_the_reference():
+    """The Fig. 3 extremes that bench/src/figures.rs pins, from the oracle's own equations integrated by
+    scipy (DOP853, rtol 1e-13): the independent check beside that change detector. The extreme is
+    the largest |.| within 0.2 of the quoted tau on the figure's 0.01 grid, refined by the parabola
+    through it and its neighbours (theta1 reaches nearly the same size at tau = 1.68)."""
+    t, Ys = reference("reduced", PAPER_EXAMPLE)
+    Y = Ys["DOP853"]
+    tau = t / PAPER_EXAMPLE["t_rot"]
+    series = {"v1": Y[:, 0], "theta1": Y[:, 1], "u2": oracle.u1(Y[:, 0], Y[:, 1])}
+    for name, (want_tau, want) in FIGURE3_EXTREMES.items():
+        window = np.flatnonzero(np.abs(tau - want_tau) <= 0.2)
+        k = window[int(np.argmax(np.abs(series[name][window])))]
+        a, b, c = series[name][k - 1:k + 2]
+        shift = 0.5 * (a - c) / (a - 2 * b + c)  # the vertex, in grid steps from k
+        got_tau, got = tau[k] + shift * (tau[k + 1] - tau[k]), b - 0.25 * (a - c) * shift
+        write_report(f"figure3-{name}", f"# figure3 {name} extreme {got:.6f} at tau {got_tau:.2f}")
+        assert abs(got_tau - want_tau) <= 0.011 and abs(got - want) <= 1e-3 * abs(want), (name, got_tau, got)
 
 
 @pytest.mark.parametrize("formulation", oracle.FORMULATIONS)

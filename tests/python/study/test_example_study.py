@@ -31,7 +31,10 @@ def readme_study_commands() -> list:
     return [line for line in match.group(1).splitlines() if line.strip()]
 
 
-def test_readme_study_examples(tmp_path):
+def test_design_studies_commands_and_figures_change_detector(tmp_path):
+    """A change detector: the commands run as written, and the figures the page quotes are those this
+    code computes (it wrote them). The same metrics are checked against the oracle, which shares no code
+    with this, in test_study.py (test_turn_map_and_hinge_moment_metrics_against_the_oracle)."""
     commands = readme_study_commands()
     assert len(commands) == 4 and all(c.startswith("cargo xtask study ") for c in commands)
     for command in commands:

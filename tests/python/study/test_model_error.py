@@ -1,5 +1,10 @@
 """`cargo xtask model-error` (python/beam_body_study/model_error.py): its quick run end to end
-through the CLI, and the README's quotation of the full report (docs/model_error.md)."""
+through the CLI, and the README's quotation of the full report (docs/model_error.md).
+
+Change detectors: the report's figures are the code's own. A model error is the difference of two
+trajectories, and each is checked against a reference that shares no code with the Rust: the quadratic
+model against the sympy oracle (tests/python/oracle/test_oracle_paper.py, test_oracle_elements_rust.py)
+and the exact beam against tests/python/oracle_exact.py (test_oracle_exact_rust.py)."""
 
 from __future__ import annotations
 
@@ -79,9 +84,9 @@ def test_errors_of_a_run_against_itself_vanish():
     assert e["v1 [0, T]"] == 0 and abs(e["v1 whole run"] - 0.01 / max(cols["v1"])) < 1e-12
 
 
-def test_readme_quotes_the_report():
+def test_readme_quotes_the_report_change_detector():
     """The README's figures of the paper's model against the converged beam are those of
-    docs/model_error.md."""
+    docs/model_error.md (the quotation, not the figures, is what this checks)."""
     report = (REPO / "docs" / "model_error.md").read_text()
     readme = (REPO / "README.md").read_text()
     quoted = re.search(r"docs/model_error\.md", readme)
