@@ -11,11 +11,12 @@
 //! C̈ = J_C q̈ + b, b the velocity and φ'' terms. The Python oracle re-derives all of this
 //! symbolically from the energies and checks the residuals below at random states.
 
+use super::dynamics_n::negative_jacobian;
 use super::kinematics::{pq, u1_accel_bias};
 use super::params::{ParamError, Params};
 use super::phi::Phi;
 use crate::math;
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use nalgebra::{DVector, Matrix2, Matrix3, Vector2, Vector3};
 use std::f64::consts::PI;
 
 /// The model with its Ritz coefficients (paper eq. 10–11) computed once.
@@ -354,19 +355,15 @@ impl BeamBody {
     }
 }
 
-/// The tangent stiffness −∂F/∂q at q, by central differences.
+/// The tangent stiffness −∂F/∂q at q ([`negative_jacobian`]'s differences).
 fn tangent_stiffness(
     force: impl Fn(Vector2<f64>) -> Vector2<f64>,
     q: Vector2<f64>,
 ) -> Matrix2<f64> {
-    let mut kt = Matrix2::zeros();
-    for j in 0..2 {
-        let e = 1e-7 * (1.0 + q[j].abs());
-        let mut dq = Vector2::zeros();
-        dq[j] = e;
-        kt.set_column(j, &(-(force(q + dq) - force(q - dq)) / (2.0 * e)));
-    }
-    kt
+    let f =
+        |x: &DVector<f64>| DVector::from_column_slice(force(Vector2::new(x[0], x[1])).as_slice());
+    let k = negative_jacobian(f, &DVector::from_column_slice(q.as_slice()));
+    Matrix2::from_column_slice(k.as_slice())
 }
 
 /// The q at rest where the generalised force vanishes, F(q, 0) = 0, by Newton's method from

@@ -17,6 +17,14 @@ beam, and the heavy rigid body hinged at its tip, turned by the prescribed relat
     C = (l + u_h + r cos theta, v1 + r sin theta), theta = theta1 + phi
     T2 = 1/2 M2 |C'|^2 + 1/2 J_C theta'^2,  Pi2 = -M2 g (u_h + r cos theta)   (gravity along +x)
     Rayleigh dissipation F = 1/2 qd^T D qd, D = alpha M_b + beta K (generalized force -D qd).
+    The beam's own weight (beam_gravity=True; the paper leaves it out): g per unit length m along +x,
+    as the body's, Pi_w = -int m g x(s) ds with x(s) = s + u(s), u(s) = -1/2 int_0^s v'^2 the axial
+    displacement of the inextensible beam to second order (u(l) = u1). Exchanging the order of the
+    double integral (sigma < s < l has length l - sigma):
+        Pi_w = -m g l^2/2 + 1/2 m g int (l - x) v'^2 dx = const + 1/2 q^T K_w q,
+        K_w = m g G_w,  G_w = int (l - x) N'^T N' dx
+    (a tension m g (l - x) from the weight beyond x: g > 0 stiffens the beam); lagrangian() computes
+    Pi_w from the double integral itself, checked against K_w in the tests.
 * formulations (residual rows are generalized forces, as in tests/python/oracle.py):
     reduced: u_h = u1(q); R = d/dt dL/dqd - dL/dq + D qd. With A = dC/dq (rows a_x = -G q - r sin(theta) c,
              a_y = b + r cos(theta) c) the body's part is M2 A^T C'' + J_C c theta'' + dPi2/dq (for
@@ -44,6 +52,35 @@ paper's scene: against DOP853, 1e-13 m for n <= 2 (n = 1: against oracle.py) and
 [0, 2 s]; steps of 1.7 ms against 0.94 ms over 10.2 s: <= 3e-9 m in v1, 4e-9 rad in theta1 for up to 32
 elements and 14 polynomials, but up to 0.04 N m (1e-4 of its peak) in the root moment EI v''(0): the
 modes the step does not resolve (omega h >~ 5) carry little deflection but much curvature.
+
+Loads (Model.hinge_loads, Model.root_loads, Trajectory.loads), from the oracle's own equations:
+* the hinge's (N, P, M), the force and moment the body exerts on the beam tip (paper eq. 18-19; -M is
+  the drive's torque on the body), by Newton-Euler for the body freed at the hinge: it carries
+  (-N, -P) at the hinge H = C - r (cos theta, sin theta), the moment -M and its weight M2 g along +x:
+      M2 C_x'' = M2 g - N,   M2 C_y'' = -P,   J_C theta'' = (H - C) x (-N, -P) - M
+      => N = M2 (g - C_x''),  P = -M2 C_y'',  M = r (P cos theta - N sin theta) - J_C theta''.
+* the root's shear force Q_root and bending moment M_root (EI v'''(0) and EI v''(0) of the exact
+  beam), as the clamp's reactions by d'Alembert's principle (Lanczos, The Variational Principles of
+  Mechanics, 1970, ch. IV) with the virtual rigid motions of beam and body: the rigid translation
+  dv = 1 and rotation dv = x about the clamp span, with the clamped basis, the basis with the clamp
+  freed (for the Hermite elements 1 = N_v0 + sum N_vi and x = N_th0 + sum (x_i N_vi + N_thi); for the
+  polynomials, all of degree <= K + 1), so the clamp's reactions are the generalized forces along them
+  (the clamped rows vanish on the motion),
+  E(dv) = int m (v_tt + alpha v_t) dv dx + int EI v'' dv'' (+ beta ...) + the body's
+  M2 C'' . dC + J_C theta'' dtheta + dPi2 + dPi_w. For a rigid motion dv'' = 0 (no elastic or
+  stiffness-proportional damping part); the translation moves the body by dC = (0, 1); the rotation
+  by dv1 = l, dtheta = 1 and du1 = -int v' dv' dx = -v1 (exact for any field), so
+  dC = (-v1 - r sin theta, l + r cos theta) = (-C_y, l + r cos theta), dPi2 = -M2 g dC_x = M2 g C_y,
+  dPi_w = m g int (l - x) v' dx = m g int v dx (by parts). The clamp's force on the beam is
+  E(1) = Q_root, its moment E(x) = -M_root (for a static tip force P: Q_root = -P, M_root = P l):
+      Q_root = int m (v_tt + alpha v_t) dx + M2 C_y''
+      M_root = -[int m x (v_tt + alpha v_t) dx + M2 (C_y'' (l + r cos theta) - C_x'' C_y) + J_C theta''
+                 + M2 g C_y + m g int v dx]
+  (with the hinge loads, M_root = M + P l - N v1 - int m x (v_tt + alpha v_t) dx - m g int v dx: the
+  moment of the tip's loads, the lever arm l rather than l + u1 as the quadratic model's
+  kinematics). Model.clamp_reactions computes them a second way, as the residual rows of the clamped
+  node of the model with the clamp's dofs freed (Hermite only). They are not the elements' own
+  EI v''(0) (Trajectory.root_moment), which converges more slowly with n.
 
 Small oscillations (natural_frequencies): Newton's method for the static equilibrium at a held phi, the
 tangent stiffness by the complex step, and the generalized eigenproblem with M(q*). At phi = 0 both bases
@@ -102,19 +139,6 @@ def scene_with_defaults(scene=None):
     return s
 
 
-def phi_law(tt, phi0=0.0, phi_end=math.pi, t_rot=0.85):
-    """The paper's turn: phi = phi0 + (phi_end - phi0) sin^2(pi t / (2 t_rot)) for t <= t_rot, then
-    phi_end. Returns (phi, dphi, ddphi) arrays. (Same law as oracle.phi_law, checked in the tests.)"""
-    tt = np.asarray(tt, dtype=float)
-    d = phi_end - phi0
-    w = math.pi / (2.0 * t_rot)
-    inside = tt <= t_rot
-    phi = np.where(inside, phi0 + d * np.sin(w * tt) ** 2, phi_end)
-    dphi = np.where(inside, d * w * np.sin(2 * w * tt), 0.0)
-    ddphi = np.where(inside, 2 * d * w * w * np.cos(2 * w * tt), 0.0)
-    return phi, dphi, ddphi
-
-
 # --------------------------------------------------------------------------------------------------
 # Shape-function providers
 # --------------------------------------------------------------------------------------------------
@@ -129,15 +153,20 @@ class HermiteBasis:
         H1 = 1 - 3 xi^2 + 2 xi^3,   H2 = h (xi - 2 xi^2 + xi^3),     (v, v' at the left node)
         H3 = 3 xi^2 - 2 xi^3,       H4 = h (-xi^2 + xi^3)            (v, v' at the right node)
     d/dx = (1/h) d/dxi. At an interior node the element to its right is used (v'' and v''' jump there);
-    x = l belongs to the last element."""
+    x = l belongs to the last element.
+
+    free_root=True frees the clamp: the dofs are then (v_0, th_0, v_1, th_1, ..., v_n, th_n) (for the
+    clamp's reactions, Model.clamp_reactions)."""
 
     name = "hermite"
 
-    def __init__(self, n, l):
+    def __init__(self, n, l, free_root=False):
         if n < 1:
             raise ValueError("n >= 1 elements")
         self.n, self.l, self.h = int(n), float(l), float(l) / n
-        self.ndof = 2 * self.n
+        self.free_root = bool(free_root)
+        self._off = 2 if self.free_root else 0  # the column of node k's v is 2 (k - 1) + _off
+        self.ndof = 2 * self.n + self._off
         self.breaks = np.linspace(0.0, self.l, self.n + 1)
         self.nodes = self.breaks[1:]
         h = self.h
@@ -158,16 +187,18 @@ class HermiteBasis:
         scale = self.h ** (-d)
         vals = [p.deriv(d)(xi) * scale if d else p(xi) for p in self._local]
         rows = np.arange(len(x))
-        # left node e (dofs 2(e-1), 2(e-1)+1; absent for e = 0, the clamp), right node e+1 (dofs 2e, 2e+1)
-        left = e >= 1
-        out[rows[left], 2 * (e[left] - 1)] = vals[0][left]
-        out[rows[left], 2 * (e[left] - 1) + 1] = vals[1][left]
-        out[rows, 2 * e] = vals[2]
-        out[rows, 2 * e + 1] = vals[3]
+        # left node e (dofs 2(e-1), 2(e-1)+1; absent for e = 0, the clamp, unless freed), right node
+        # e+1 (dofs 2e, 2e+1); all shifted by 2 with the clamp freed
+        o = self._off
+        left = (e >= 1) | self.free_root
+        out[rows[left], 2 * (e[left] - 1) + o] = vals[0][left]
+        out[rows[left], 2 * (e[left] - 1) + 1 + o] = vals[1][left]
+        out[rows, 2 * e + o] = vals[2]
+        out[rows, 2 * e + 1 + o] = vals[3]
         return out
 
     def tip_dofs(self):
-        return 2 * self.n - 2, 2 * self.n - 1
+        return self.ndof - 2, self.ndof - 1
 
 
 class LegendreBasis:
@@ -229,19 +260,24 @@ def _phis(phis):
 class Model:
     """Assembled matrices and the residuals / accelerations of the three formulations.
 
-    Arrays of states broadcast: q, qd, qdd of shape (..., ndof), phi tuples of shape (...)."""
+    Arrays of states broadcast: q, qd, qdd of shape (..., ndof), phi tuples of shape (...).
+    beam_gravity: the beam's own weight (K_w of the module docstring)."""
 
-    def __init__(self, basis, params=None, damping=(0.0, 0.0)):
+    def __init__(self, basis, params=None, damping=(0.0, 0.0), beam_gravity=False):
         self.basis = basis
         self.p = full_params(params)
         self.alpha, self.beta = _damping(params, damping)
+        self.beam_gravity = bool(beam_gravity)
         p = self.p
         xq, wq = quadrature(basis.breaks, basis.quad_points)
         N0, N1, N2 = (basis.eval(xq, d) for d in (0, 1, 2))
         self.Mb = p["m"] * N0.T @ (wq[:, None] * N0)
         self.K = p["EI"] * N2.T @ (wq[:, None] * N2)
         self.G = N1.T @ (wq[:, None] * N1)
-        for A in (self.Mb, self.K, self.G):
+        # G_w = int (l - x) N'^T N' dx (degree 2 deg N' + 1: exact with the rule's points)
+        Gw = N1.T @ ((wq * (p["l"] - xq))[:, None] * N1)
+        self.Kw = (p["m"] * p["g"] if self.beam_gravity else 0.0) * Gw
+        for A in (self.Mb, self.K, self.G, self.Kw):
             A[:] = 0.5 * (A + A.T)
         self.b = basis.eval([p["l"]], 0)[0]
         self.c = basis.eval([p["l"]], 1)[0]
@@ -296,6 +332,7 @@ class Model:
             + M2 * (a_x * Cxdd[..., None] + a_y * Cydd[..., None])
             + J_C * c * thdd[..., None]
             + M2 * g * (Gq + r * s[..., None] * c)
+            + q @ self.Kw
         )
 
     def residual_linear(self, phis, q, qd, qdd):
@@ -334,6 +371,7 @@ class Model:
             + M2 * ((-r * s[..., None] * c) * Cxdd[..., None] + (b + r * co[..., None] * c) * Cydd[..., None])
             + J_C * c * thdd[..., None]
             + M2 * g * r * s[..., None] * c
+            + q @ self.Kw
         )
         lam = M2 * Cxdd - M2 * g  # E_u2
         # f = u2 - u1(q) = u2 + 1/2 q^T G q: df/dq = G q
@@ -351,6 +389,64 @@ class Model:
         thdd = qdd @ self.c + ddph
         Cxdd = ddu2 - p["r"] * np.sin(th) * thdd - p["r"] * np.cos(th) * thd**2
         return p["M2"] * (Cxdd - p["g"])
+
+    # ---- loads (module docstring, "Loads") -----------------------------------------------------------
+    def _body_accel(self, phis, q, qd, qdd):
+        """(C_x'' , C_y'', theta, theta'') of the body on the reduced model's motion (u_h = u1(q))."""
+        r = self.p["r"]
+        q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+        Gq, thd, thdd, s, co, Cydd = self._body(phis, q, qd, qdd)
+        ddu1 = -np.sum((qd @ self.G) * qd, axis=-1) - np.sum(Gq * qdd, axis=-1)
+        Cxdd = ddu1 - r * s * thdd - r * co * thd**2
+        return Cxdd, Cydd, np.arctan2(s, co), thdd
+
+    def hinge_loads(self, phis, q, qd, qdd):
+        """(N, P, M): the force and moment the body exerts on the beam tip, from the body's Newton-Euler
+        equations (module docstring); q, qd, qdd on the reduced model's motion."""
+        p = self.p
+        Cxdd, Cydd, th, thdd = self._body_accel(phis, q, qd, qdd)
+        N = p["M2"] * (p["g"] - Cxdd)
+        P = -p["M2"] * Cydd
+        M = p["r"] * (P * np.cos(th) - N * np.sin(th)) - p["J_C"] * thdd
+        return N, P, M
+
+    def root_loads(self, phis, q, qd, qdd):
+        """(M_root, Q_root): the clamp's reactions by d'Alembert's principle with the virtual rigid
+        translation and rotation of beam and body (module docstring)."""
+        p = self.p
+        m, l, r, M2, g = p["m"], p["l"], p["r"], p["M2"], p["g"]
+        q, qd, qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+        xq, wq = quadrature(self.basis.breaks, self.basis.quad_points)
+        B0 = self.basis.eval(xq, 0)
+        # the beam's inertia and mass-proportional damping force density m (v_tt + alpha v_t)
+        f = m * ((qdd + self.alpha * qd) @ B0.T)
+        Cxdd, Cydd, th, thdd = self._body_accel(phis, q, qd, qdd)
+        v1 = q @ self.b
+        Cy = v1 + r * np.sin(th)
+        Q_root = np.sum(wq * f, axis=-1) + M2 * Cydd
+        E_rot = (
+            np.sum(wq * xq * f, axis=-1)
+            + M2 * (Cydd * (l + r * np.cos(th)) - Cxdd * Cy)
+            + p["J_C"] * thdd
+            + M2 * g * Cy
+        )
+        if self.beam_gravity:
+            E_rot = E_rot + m * g * np.sum(wq * (q @ B0.T), axis=-1)
+        return -E_rot, Q_root
+
+    def clamp_reactions(self, phis, q, qd, qdd):
+        """(M_root, Q_root) a second way: (-R_th0, R_v0), R the residual rows of the clamped node of the
+        same model with the clamp's dofs freed (HermiteBasis(free_root=True)), at the clamped state
+        (v_0 = th_0 = 0 and their rates); also returns the freed model's other rows, which the clamped
+        model's accelerations make zero. Hermite elements only."""
+        if not isinstance(self.basis, HermiteBasis) or self.basis.free_root:
+            raise ValueError("clamp_reactions: a clamped Hermite model")
+        free = Model(HermiteBasis(self.basis.n, self.p["l"], free_root=True), self.p,
+                     (self.alpha, self.beta), self.beam_gravity)
+        pad = lambda a: np.concatenate([np.zeros(np.shape(a)[:-1] + (2,)), a], axis=-1)  # noqa: E731
+        R = free.residual_reduced(phis, pad(np.asarray(q, float)), pad(np.asarray(qd, float)),
+                                  pad(np.asarray(qdd, float)))
+        return -R[..., 1], R[..., 0], R[..., 2:]
 
     # ---- mass matrices and accelerations -----------------------------------------------------------
     def mass_matrix(self, q, phi):
@@ -414,8 +510,12 @@ class Model:
     def lagrangian(self, q, qd, phi, dphi, uh=None, duh=None, npts=None):
         """(L, F_Rayleigh) from the energy integrals evaluated on the field itself by quadrature (more
         points than the assembly uses); u_h = u1(q) (reduced) unless uh/duh are given (the DAE's
-        free coordinate). Complex-safe. Returns L = T1 + T2 - Pi1 - Pi2 and the Rayleigh dissipation
-        F = 1/2 int (alpha m vdot^2 + beta EI vdot''^2) dx."""
+        free coordinate). Complex-safe. Returns L = T1 + T2 - Pi1 - Pi2 (- Pi_w with the beam's weight)
+        and the Rayleigh dissipation F = 1/2 int (alpha m vdot^2 + beta EI vdot''^2) dx.
+
+        The beam's weight, Pi_w = -int m g (s + u(s)) ds, is the double integral itself: u(s) at each
+        outer point s by its own composite rule on [0, s] (not K_w, whose single integral comes from
+        exchanging the order)."""
         p = self.p
         basis = self.basis
         xq, wq = quadrature(basis.breaks, (npts or basis.quad_points + 3))
@@ -438,10 +538,33 @@ class Model:
         T2 = 0.5 * p["M2"] * (xCd**2 + yCd**2) + 0.5 * p["J_C"] * thd**2
         Pi2 = -p["M2"] * p["g"] * (uh + r * np.cos(th))
         F = 0.5 * np.sum(wq * (self.alpha * p["m"] * vt0**2 + self.beta * p["EI"] * vt2**2), axis=-1)
-        return T1 + T2 - Pi1 - Pi2, F
+        L = T1 + T2 - Pi1 - Pi2
+        if self.beam_gravity:
+            S, B1in = self._inner_rule(xq, npts or basis.quad_points + 3)
+            u = -0.5 * (q @ B1in.T) ** 2 @ S.T  # u(x_j) = -1/2 int_0^x_j v'^2
+            L = L + p["m"] * p["g"] * np.sum(wq * (xq + u), axis=-1)  # - Pi_w
+        return L, F
+
+    def _inner_rule(self, xq, npts):
+        """For the outer points xq: (S, B1) with S (len(xq), P) the weights of the composite rules on
+        [0, x_j] (npts points between breaks) over their P inner points together, and B1 the shape
+        functions' slopes at those points."""
+        pts, rows = [], []
+        for xj in xq:
+            br = np.append(self.basis.breaks[self.basis.breaks < xj], xj)
+            xi, wi = quadrature(br, npts)
+            pts.append(xi)
+            rows.append(wi)
+        S = np.zeros((len(xq), sum(len(w) for w in rows)))
+        k = 0
+        for j, w in enumerate(rows):
+            S[j, k : k + len(w)] = w
+            k += len(w)
+        return S, self.basis.eval(np.concatenate(pts), 1)
 
     def energy(self, phis, q, qd):
-        """Total energy T1 + T2 + Pi1 + Pi2 of the reduced model (from the assembled matrices)."""
+        """Total energy T1 + T2 + Pi1 + Pi2 (+ Pi_w) of the reduced model (from the assembled matrices;
+        the potentials without their constants -M2 g l and -m g l^2 / 2)."""
         p = self.p
         ph, dph, _ = _phis(phis)
         q, qd = np.asarray(q), np.asarray(qd)
@@ -454,7 +577,8 @@ class Model:
         yCd = qd @ self.b + p["r"] * np.cos(th) * thd
         T2 = 0.5 * p["M2"] * (xCd**2 + yCd**2) + 0.5 * p["J_C"] * thd**2
         Pi2 = -p["M2"] * p["g"] * (uh + p["r"] * np.cos(th))
-        return T1 + T2 + Pi1 + Pi2
+        Piw = 0.5 * np.einsum("...i,ij,...j->...", q, self.Kw, q)
+        return T1 + T2 + Pi1 + Pi2 + Piw
 
     # ---- fast scalar right-hand side (reduced) -----------------------------------------------------
     def _rhs_reduced(self):
@@ -463,7 +587,8 @@ class Model:
         Computations, §2.1.4). Checked against accelerations() in the tests."""
         p = self.p
         r, M2, J_C, g = p["r"], p["M2"], p["J_C"], p["g"]
-        b, c, G, K, D = self.b, self.c, self.G, self.K, self.D
+        b, c, G, D = self.b, self.c, self.G, self.D
+        K = self.K + self.Kw  # the beam's weight: a stiffness
         Mbi = self._Mb_inv
         Mbi_c = Mbi @ c
         Mbi_b = Mbi @ b
@@ -494,11 +619,11 @@ class Model:
         return f
 
 
-def model(n, params=None, basis="hermite", damping=(0.0, 0.0)) -> Model:
+def model(n, params=None, basis="hermite", damping=(0.0, 0.0), beam_gravity=False) -> Model:
     """The n-element (Hermite) or n-function (poly) model. params may also hold damping_alpha [1/s] and
-    damping_beta [s] (they override damping = (alpha, beta))."""
+    damping_beta [s] (they override damping = (alpha, beta)); beam_gravity: the beam's own weight."""
     p = full_params(params)
-    return Model(make_basis(basis, n, p["l"]), params, damping)
+    return Model(make_basis(basis, n, p["l"]), params, damping, beam_gravity)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -517,14 +642,32 @@ class Trajectory:
     du2: np.ndarray
     model: Model = field(repr=False, default=None)
     stats: dict = field(default_factory=dict)
+    scene: dict = field(default=None)  # the scene with its defaults (for phi along t)
 
     def v(self, x, d=0):
         """(len(t), len(x)): d-th x-derivative of v at the points x along the trajectory."""
         return self.model.field(self.q, x, d)
 
     def root_moment(self):
-        """EI v''(0, t)."""
+        """EI v''(0, t): the elements' own curvature at the clamp (not the clamp's reaction M_root)."""
         return self.model.p["EI"] * self.v([0.0], 2)[:, 0]
+
+    def phis(self):
+        """(phi, phi', phi'') at t (right-continuous: at t_rot, the hold's)."""
+        return phi_at(self.scene, self.t)
+
+    def accelerations(self):
+        """q'' along t from the model's own equations (reduced; the linear formulation's own for a
+        linear trajectory is not offered)."""
+        return self.model.accelerations(self.phis(), self.q, self.qd)
+
+    def loads(self):
+        """{N, P, M, M_root, Q_root} along t (module docstring, "Loads"), on the reduced model's
+        motion."""
+        phis, qdd = self.phis(), self.accelerations()
+        N, P, M = self.model.hinge_loads(phis, self.q, self.qd, qdd)
+        M_root, Q_root = self.model.root_loads(phis, self.q, self.qd, qdd)
+        return {"N": N, "P": P, "M": M, "M_root": M_root, "Q_root": Q_root}
 
 
 def output_grid(scene):
@@ -534,6 +677,16 @@ def output_grid(scene):
     if s["t_end"] - grid[-1] > 1e-9 * max(1.0, s["t_end"]):
         grid = np.append(grid, s["t_end"])
     return grid
+
+
+def phi_at(scene, t):
+    """(phi, phi', phi'') of the scene's law at the times t, right-continuous (at t_rot: the hold)."""
+    s = scene_with_defaults(scene)
+    t = np.asarray(t, dtype=float)
+    law = _law_fn(s)
+    turning = (s["t_rot"] > 0) and (s["phi_end"] != s["phi0"])
+    inside = (t < s["t_rot"]) if turning else np.zeros(t.shape, dtype=bool)
+    return tuple(np.where(inside, a, b) for a, b in zip(law(t, True), law(t, False)))
 
 
 def _segments(s, t_end):
@@ -819,6 +972,15 @@ _MEMO: dict = {}
 DEFAULT_H = 2e-3
 
 
+def save_trajectory(path, Y, stats):
+    """Writes a cached trajectory atomically (a temporary file in the cache, renamed)."""
+    CACHE_DIR.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=CACHE_DIR, suffix=".npz")
+    os.close(fd)
+    np.savez(tmp, Y=Y, stats=json.dumps(stats))
+    os.replace(tmp, path)
+
+
 def trajectory(
     n,
     formulation="reduced",
@@ -834,6 +996,7 @@ def trajectory(
     q0=None,
     qd0=None,
     cache=True,
+    beam_gravity=False,
 ):
     """Integrate the n-element / n-function model on t_eval (default: the scene's output grid), per
     segment [0, t_rot], [t_rot, t_end] (phi'' jumps at both ends of the turn). Returns a Trajectory
@@ -847,6 +1010,7 @@ def trajectory(
     evaluations for 4 elements over 2 s at rtol 1e-10..1e-12, slower than DOP853, so it is not offered.
 
     q0, qd0: initial coordinates (default zero; the dae starts consistent, u2 = u1(q0)).
+    beam_gravity: the beam's own weight (module docstring).
     Cached in target/oracle-cache (npz, keyed by the arguments, this file's text and the scipy and
     numpy versions) and in memory."""
     s = scene_with_defaults(scene)
@@ -854,7 +1018,7 @@ def trajectory(
     for k in DAMPING_NAMES:
         if k in s:
             params[k] = s[k]
-    mdl = model(n, params, basis, damping)
+    mdl = model(n, params, basis, damping, beam_gravity)
     if t_eval is None:
         t_eval = output_grid(s)
     t_eval = np.asarray(t_eval, dtype=float)
@@ -866,6 +1030,7 @@ def trajectory(
     key = _cache_key(
         [n, formulation, s, basis, list(map(float, t_eval)), rtol, atol, method, h, stages,
          [mdl.alpha, mdl.beta], list(map(float, q0)), list(map(float, qd0))]
+        + (["beam_gravity"] if mdl.beam_gravity else [])
     )
     if key in _MEMO:
         Y, stats = _MEMO[key]
@@ -888,11 +1053,7 @@ def trajectory(
             Y, stats = _integrate(mdl, formulation, s, t_eval, x0, v0, method, rtol, atol, h, stages)
             assert np.all(np.isfinite(Y)), "trajectory: not every output time was reached"
             if cache:
-                CACHE_DIR.mkdir(parents=True, exist_ok=True)
-                fd, tmp = tempfile.mkstemp(dir=CACHE_DIR, suffix=".npz")
-                os.close(fd)
-                np.savez(tmp, Y=Y, stats=json.dumps(stats))
-                os.replace(tmp, path)
+                save_trajectory(path, Y, stats)
         _MEMO[key] = (Y, stats)
     if dae:
         q, u2, qd, du2 = Y[:, :nd], Y[:, nd], Y[:, nd + 1 : 2 * nd + 1], Y[:, 2 * nd + 1]
@@ -900,7 +1061,7 @@ def trajectory(
         q, qd = Y[:, :nd], Y[:, nd:]
         u2, du2 = mdl.u1(q), mdl.du1(q, qd)
     v1, th1 = mdl.tip(q)
-    return Trajectory(t_eval, v1, th1, u2, q, qd, du2, mdl, dict(stats))
+    return Trajectory(t_eval, v1, th1, u2, q, qd, du2, mdl, dict(stats), s)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -932,14 +1093,21 @@ def static_equilibrium(mdl, phi, tol=1e-12, maxit=50):
     def scale(q):
         aq = np.abs(q)
         gravity = abs(p["M2"] * p["g"]) * (np.abs(mdl.G) @ aq + abs(p["r"]) * np.abs(mdl.c))
-        return np.abs(mdl.K) @ aq + gravity + 1e-300
+        return np.abs(mdl.K) @ aq + np.abs(mdl.Kw) @ aq + gravity + 1e-300
 
-    q = np.zeros(n)
+    return damped_newton(res, lambda q: tangent_stiffness(mdl, q, phi), scale, np.zeros(n), tol, maxit,
+                         f"static equilibrium at phi={phi}")
+
+
+def damped_newton(res, jac, scale, q, tol, maxit, what):
+    """Newton's method on res(q) = 0 from q, the step halved while the residual's norm grows; converged
+    when |res| <= tol * scale(q) componentwise, after at least one full step unless res(q) vanishes at
+    the start. Raises RuntimeError naming `what` otherwise."""
     Rq = res(q)
     for it in range(maxit):
         if np.all(np.abs(Rq) <= tol * scale(q)) and (it > 0 or not np.any(Rq)):
             return q
-        dq = np.linalg.solve(tangent_stiffness(mdl, q, phi), -Rq)
+        dq = np.linalg.solve(jac(q), -Rq)
         lam = 1.0
         while True:
             qn = q + lam * dq
@@ -948,15 +1116,14 @@ def static_equilibrium(mdl, phi, tol=1e-12, maxit=50):
                 break
             lam *= 0.5
         q, Rq = qn, Rn
-    raise RuntimeError(f"static equilibrium at phi={phi}: Newton did not converge, |R| / scale = "
-                       f"{np.max(np.abs(Rq) / scale(q))}")
+    raise RuntimeError(f"{what}: Newton did not converge, |R| / scale = {np.max(np.abs(Rq) / scale(q))}")
 
 
-def small_oscillations(n, phi, params=None, basis="hermite", damping=(0.0, 0.0)):
+def small_oscillations(n, phi, params=None, basis="hermite", damping=(0.0, 0.0), beam_gravity=False):
     """(q*, omega^2 ascending, modes (columns, mass-normalized), M(q*), K_T(q*), model)."""
     from scipy.linalg import eigh
 
-    mdl = model(n, params, basis, damping)
+    mdl = model(n, params, basis, damping, beam_gravity)
     q = static_equilibrium(mdl, phi)
     KT = tangent_stiffness(mdl, q, phi)
     asym = np.max(np.abs(KT - KT.T)) / np.max(np.abs(KT))
@@ -967,10 +1134,10 @@ def small_oscillations(n, phi, params=None, basis="hermite", damping=(0.0, 0.0))
     return q, w2, V, Mq, KT, mdl
 
 
-def natural_frequencies(n, phi, params=None, basis="hermite", k=None):
+def natural_frequencies(n, phi, params=None, basis="hermite", k=None, beam_gravity=False):
     """Ascending angular frequencies omega [rad/s] of small oscillations about the static equilibrium at a
     held phi (phi' = phi'' = 0); the first k (all by default). An unstable mode (omega^2 <= 0) raises."""
-    _, w2, _, _, _, _ = small_oscillations(n, phi, params, basis)
+    _, w2, _, _, _, _ = small_oscillations(n, phi, params, basis, beam_gravity=beam_gravity)
     if np.any(w2 <= 0):
         raise ValueError(f"unstable equilibrium at phi={phi}: omega^2 = {w2[w2 <= 0]}")
     w = np.sqrt(w2)
