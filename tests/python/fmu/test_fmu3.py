@@ -406,20 +406,25 @@ def test_accuracy_of_each_interface(fmu3_unzipdir, fmu_unzipdir, fmu_model_descr
         assert not s2.errors(), s2.errors()
     finally:
         s2.free()
+    # Each row with its bound, a few times the figure measured (2026-12-06, in the comments).
     rows.append(("FMI 2.0 co-simulation, input with derivatives, h = 8.5 ms, rtol 1e-10 (vs the law)",
-                 err(y2, ref, "v1")))
+                 err(y2, ref, "v1"), 1e-7))  # 3.1e-8
     cs = simulate(fmu3_unzipdir, "CoSimulation", 1e-9, 3)
     rows.append(("co-simulation, law, rtol 1e-9 (vs CLI at 1e-9)",
-                 float(np.max(np.abs(cs["v1"] - cli(beam_body, rtol=1e-9)["v1"])))))
+                 float(np.max(np.abs(cs["v1"] - cli(beam_body, rtol=1e-9)["v1"]))), SAME_STEPS))  # 2.0e-15
     me = simulate(fmu3_unzipdir, "ModelExchange", ME_RTOL, 3)
     me_ref = cli(beam_body, **ME_REF)
     rows.append(("model exchange, law, FMPy CVode rtol 1e-10 (vs CLI at 1e-11)",
-                 float(np.max(np.abs(np.interp(me_ref["t"], me["time"], me["v1"]) - me_ref["v1"])))))
+                 float(np.max(np.abs(np.interp(me_ref["t"], me["time"], me["v1"]) - me_ref["v1"]))),
+                 3e-7))  # 8.1e-8
+    # values only at 8.5 ms: 2.4e-4; the others 5.8e-7 to 6.3e-7 (B_MAX: (b)'s bound above)
+    bounds = {(HS[0], False): 7e-4, (HS[0], True): B_MAX, (HS[-1], False): B_MAX, (HS[-1], True): B_MAX}
     for h in (HS[0], HS[-1]):
         for intermediate, what in ((False, "values only"), (True, "intermediate update")):
             y = on_paper_grid(run_input(fmu3_unzipdir, md3, beam_body, h, intermediate)["y"], h)
             rows.append((f"co-simulation, input, {what}, h = {h * 1e3:g} ms, rtol 1e-10 (vs the law)",
-                         err(y, ref, "v1")))
-    for what, value in rows:
+                         err(y, ref, "v1"), bounds[(h, intermediate)]))
+    for what, value, _ in rows:
         fmu_report.figure("fmi3 accuracy", f"max|v1 - CLI| {what}", value)
-    assert all(np.isfinite(v) and v < 1e-3 for _, v in rows), rows
+    over = [(what, value, bound) for what, value, bound in rows if not (np.isfinite(value) and value <= bound)]
+    assert not over, over

@@ -53,7 +53,9 @@ def test_readme_fmpy_block_runs(tmp_path):
         "\nimport math\n"
         "assert abs(result['time'][-1] - 10.2) < 1e-9, result['time'][-1]\n"
         "peak = max(abs(v) for v in result['v1'])\n"
-        "assert 0.55 < peak < 0.62, peak\n"  # the paper's scene: max |v1| = 0.591 m (Fig. 3a)
+        # The oracle's peak on the same 8.5 ms grid (scipy DOP853 at rtol 1e-13, tests/python/oracle/
+        # test_oracle_paper.py): 0.590725 m; the FMU at its default rtol 1e-6 measured 2.3e-5 m off.
+        "assert abs(peak - 0.590725) < 1e-4, peak\n"
         "assert all(math.isfinite(v) for name in ('v1', 'theta1', 'u2', 'M') for v in result[name])\n"
         "print('peak |v1|', peak)\n"
     )

@@ -62,5 +62,7 @@ def test_natural_periods_report():
     print("\n" + msg)
     write_report("periods", "# " + msg)
     T_quarter = oracle.natural_periods(math.pi / 2)[0]
-    # the paper: "a period of about 1.6 s with the body turned by pi/2"
-    assert 1.4 < T_quarter < 1.8, msg
+    # The paper: "a period of about 1.6 s with the body turned by pi/2", two figures: the oracle's
+    # 1.5348 s is 4.1 % below it. The period itself is checked tightly (1e-10) against the mass and
+    # stiffness matrices assembled by hand, without gravity, above.
+    assert abs(T_quarter - 1.6) < 0.05 * 1.6, msg
