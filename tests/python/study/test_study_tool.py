@@ -422,11 +422,10 @@ def test_the_cases_are_stated_first_and_too_many_are_refused(beam_body, tmp_path
     ok(tool(beam_body, "run", study, "-o", out, "--max-cases", 8, "--quiet"))
 
     huge = write(tmp_path / "huge.toml", HUGE)
-    began = time.perf_counter()
     line = one_error(tool(beam_body, "run", huge, "-o", tmp_path / "huge.parquet", timeout=60))
     assert "1,001,000 cases" in line and "1,000,000" in line and "--max-cases" in line, line
-    assert time.perf_counter() - began < 30, "the refusal came late: did something run?"
-    assert not (tmp_path / "huge.parquet.parts").exists()
+    # Refused before anything ran: no table, no chunk directory.
+    assert not (tmp_path / "huge.parquet").exists() and not (tmp_path / "huge.parquet.parts").exists()
     # The CLI has the same limit and default; a chunk of a huge study is within it.
     proc = subprocess.run([str(beam_body), "study", str(huge), "-o", str(tmp_path / "h.csv")],
                           capture_output=True, text=True, timeout=60)
