@@ -315,6 +315,8 @@ def run_local(plan: Plan, work: WorkDir, todo: list, threads: int | None, progre
             result = worker.run_chunk(spec, k, start, stop, threads=threads)
         except RuntimeError as e:
             raise StudyError(f"{e} (the finished chunks are kept in {work.path})") from None
+        if result.get("interrupted"):
+            raise KeyboardInterrupt
         work.save(k, result)
         progress.add(stop - start)
 
@@ -390,7 +392,11 @@ def run_dask(plan: Plan, work: WorkDir, todo: list, scheduler: str | None, worke
         for fut in as_completed(futures):
             k = futures[fut]
             try:
-                work.save(k, fut.result())
+                result = fut.result()
+                if result.get("interrupted"):
+                    # The same Ctrl-C as the tool's, which may not have reached it yet.
+                    raise KeyboardInterrupt
+                work.save(k, result)
             except Exception as e:  # noqa: BLE001: a chunk's failure is reported, not fatal
                 errors.append(f"chunk {k}: {e}")
                 continue

@@ -13,6 +13,9 @@ import subprocess
 import tempfile
 import time
 
+#: The CLI's exit status when a SIGINT or SIGTERM stopped it (the shell's code for SIGINT).
+INTERRUPTED_EXIT = 130
+
 #: sha256 of the binaries this process has run, by (path, size, mtime).
 _HASHES: dict = {}
 
@@ -41,7 +44,8 @@ def worker_name() -> str:
 
 
 def run_chunk(spec: dict, chunk: int, start: int, stop: int, threads: int = 1) -> dict:
-    """Runs cases start..stop of the study in `spec` and returns the CSV text with its origin.
+    """Runs cases start..stop of the study in `spec` and returns the CSV text with its origin, or
+    `interrupted` set when a SIGINT or SIGTERM stopped the CLI.
 
     `spec` holds the CLI's path and sha256 (a worker whose binary differs refuses: its rows
     could differ), the study file's text and its base scene's text. Both are written to a
@@ -73,6 +77,11 @@ def run_chunk(spec: dict, chunk: int, start: int, stop: int, threads: int = 1) -
         out = os.path.join(tmp, "rows.csv")
         cmd += ["--quiet", "-o", out]
         proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode == INTERRUPTED_EXIT:
+            # Ctrl-C reached the CLI (the terminal signals the whole process group): the run
+            # is being interrupted, which the client reports as such, whichever sees it first.
+            # A result, not an exception, which Dask's workers would log as a failed task.
+            return {"chunk": chunk, "interrupted": True, "worker": worker_name()}
         if proc.returncode != 0:
             raise RuntimeError(
                 f"chunk {chunk} (cases {start}..{stop}) failed on {worker_name()}: "
