@@ -264,24 +264,29 @@ def test_a_contour_level_outside_the_data_is_said_and_the_plot_written(beam_body
 # --- Ctrl-C on Dask ----------------------------------------------------------------------------
 
 
-def test_ctrl_c_on_a_dask_run_exits_quietly_and_a_rerun_goes_on(beam_body, tmp_path):
-    cases = 6000
+def start_long_study(beam_body, tmp_path, engine):
+    """A study of 6000 cases in chunks of 100 started in its own process group, which gets a SIGINT
+    as a terminal's Ctrl-C does (the tool, its LocalCluster's threads and the CLI processes of the
+    chunks in flight): (the process, its arguments, the output, the chunks' directory)."""
     study = write(tmp_path / "long.toml", f"""
 scene = "{PAPER_SCENE}"
 metrics = ["peak_M"]
 [parameters.M2]
 start = 6
 stop = 24
-count = {cases}
+count = 6000
 """)
-    out = tmp_path / "long.parquet"
-    parts = tmp_path / "long.parquet.parts"
+    out, parts = tmp_path / "long.parquet", tmp_path / "long.parquet.parts"
     args = [sys.executable, "-m", "beam_body_study", "run", str(study), "-o", str(out),
-            "--engine", "dask", "--workers", "2", "--chunk-size", "100"]
-    # Its own process group, which gets the SIGINT as a terminal's Ctrl-C does: the tool, its
-    # LocalCluster's threads and the CLI processes of the chunks in flight.
+            "--engine", engine, "--chunk-size", "100"] + (["--workers", "2"] if engine == "dask" else [])
     run = subprocess.Popen(args, env=env(beam_body), cwd=REPO, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    return run, args, out, parts
+
+
+def test_ctrl_c_on_a_dask_run_exits_quietly_and_a_rerun_goes_on(beam_body, tmp_path):
+    cases = 6000
+    run, args, out, parts = start_long_study(beam_body, tmp_path, "dask")
     try:
         deadline = time.monotonic() + 60
         while len(list(parts.glob("chunk-*.csv"))) < 2:
@@ -319,19 +324,7 @@ def test_a_chunk_whose_cli_is_interrupted_interrupts_the_run(beam_body, tmp_path
     interrupted, exit 130, with what it kept, and no chunk as failed."""
     import psutil
 
-    study = write(tmp_path / "long.toml", f"""
-scene = "{PAPER_SCENE}"
-metrics = ["peak_M"]
-[parameters.M2]
-start = 6
-stop = 24
-count = 6000
-""")
-    out, parts = tmp_path / "long.parquet", tmp_path / "long.parquet.parts"
-    args = [sys.executable, "-m", "beam_body_study", "run", str(study), "-o", str(out),
-            "--engine", engine, "--chunk-size", "100"] + (["--workers", "2"] if engine == "dask" else [])
-    run = subprocess.Popen(args, env=env(beam_body), cwd=REPO, stdout=subprocess.PIPE,
-                           stderr=subprocess.PIPE, text=True, start_new_session=True)
+    run, _, _, parts = start_long_study(beam_body, tmp_path, engine)
     try:
         tool = psutil.Process(run.pid)
         deadline = time.monotonic() + 60  # a guard against a hang, not a speed claim
