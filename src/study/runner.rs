@@ -54,30 +54,27 @@ pub fn run_cases<E>(
         let mut early = BTreeMap::new();
         let (mut expected, mut done) = (cases.start, 0);
         let result = loop {
-            let got = rx.recv_timeout(TICK);
-            if let Ok(_) | Err(mpsc::RecvTimeoutError::Timeout) = got {
-                done += u64::from(got.is_ok());
-                if progress(done).is_break() {
-                    stop.store(true, Ordering::Relaxed);
+            let row = match rx.recv_timeout(TICK) {
+                Ok(row) => Some(row),
+                Err(mpsc::RecvTimeoutError::Timeout) => None,
+                Err(mpsc::RecvTimeoutError::Disconnected) => break Ok(()),
+            };
+            done += u64::from(row.is_some());
+            if progress(done).is_break() {
+                stop.store(true, Ordering::Relaxed);
+            }
+            let Some(row) = row else { continue };
+            early.insert(row.case, row);
+            let mut failed = None;
+            while let Some(row) = early.remove(&expected) {
+                expected += 1;
+                if let Err(e) = on_row(row) {
+                    failed = Some(e);
+                    break;
                 }
             }
-            match got {
-                Ok(row) => {
-                    early.insert(row.case, row);
-                    let mut failed = None;
-                    while let Some(row) = early.remove(&expected) {
-                        expected += 1;
-                        if let Err(e) = on_row(row) {
-                            failed = Some(e);
-                            break;
-                        }
-                    }
-                    if let Some(e) = failed {
-                        break Err(e);
-                    }
-                }
-                Err(mpsc::RecvTimeoutError::Timeout) => {}
-                Err(mpsc::RecvTimeoutError::Disconnected) => break Ok(()),
+            if let Some(e) = failed {
+                break Err(e);
             }
         };
         // On error, let the threads see the flag and the closed channel, and end.
