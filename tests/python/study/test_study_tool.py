@@ -284,21 +284,32 @@ count = 6000
     return run, args, out, parts
 
 
-def test_ctrl_c_on_a_dask_run_exits_quietly_and_a_rerun_goes_on(beam_body, tmp_path):
-    cases = 6000
-    run, args, out, parts = start_long_study(beam_body, tmp_path, "dask")
+def interrupt_when(run, ready, interrupt) -> str:
+    """Waits until `ready()` gives something (at most 60 s: a guard against a hang, not a speed
+    claim), hands it to `interrupt`, and returns the run's stderr once it ends; a run still alive
+    after that is killed."""
     try:
         deadline = time.monotonic() + 60
-        while len(list(parts.glob("chunk-*.csv"))) < 2:
+        while True:
             assert run.poll() is None, f"the run ended first: {run.communicate()[1]}"
-            assert time.monotonic() < deadline, "no chunk appeared in 60 s"
-            time.sleep(0.01)
-        os.killpg(run.pid, signal.SIGINT)
-        _, err = run.communicate(timeout=60)
+            assert time.monotonic() < deadline, "the run was not ready to interrupt in 60 s"
+            got = ready()
+            if got:
+                break
+            time.sleep(0.005)
+        interrupt(got)
+        return run.communicate(timeout=60)[1]
     finally:
         if run.poll() is None:
             os.killpg(run.pid, signal.SIGKILL)
             run.wait()
+
+
+def test_ctrl_c_on_a_dask_run_exits_quietly_and_a_rerun_goes_on(beam_body, tmp_path):
+    cases = 6000
+    run, args, out, parts = start_long_study(beam_body, tmp_path, "dask")
+    err = interrupt_when(run, lambda: len(list(parts.glob("chunk-*.csv"))) >= 2,
+                         lambda _: os.killpg(run.pid, signal.SIGINT))
     assert run.returncode == 130, err
     for noise in ("Traceback", "CancelledError", "WARNING", "Exception"):
         assert noise not in err, err
@@ -325,23 +336,17 @@ def test_a_chunk_whose_cli_is_interrupted_interrupts_the_run(beam_body, tmp_path
     import psutil
 
     run, _, _, parts = start_long_study(beam_body, tmp_path, engine)
-    try:
-        tool = psutil.Process(run.pid)
-        deadline = time.monotonic() + 60  # a guard against a hang, not a speed claim
-        while True:
-            assert run.poll() is None, f"the run ended first: {run.communicate()[1]}"
-            assert time.monotonic() < deadline, "no chunk and no CLI process in 60 s"
-            clis = [c for c in tool.children(recursive=True) if c.name() == "beam-body"]
-            if clis and list(parts.glob("chunk-*.csv")):
-                break
-            time.sleep(0.005)
+    tool = psutil.Process(run.pid)
+
+    def clis_once_a_chunk_is_kept():
+        clis = [c for c in tool.children(recursive=True) if c.name() == "beam-body"]
+        return clis if clis and list(parts.glob("chunk-*.csv")) else None
+
+    def sigint(clis):
         for c in clis:
             c.send_signal(signal.SIGINT)
-        _, err = run.communicate(timeout=60)
-    finally:
-        if run.poll() is None:
-            os.killpg(run.pid, signal.SIGKILL)
-            run.wait()
+
+    err = interrupt_when(run, clis_once_a_chunk_is_kept, sigint)
     assert run.returncode == 130, err
     assert "failed" not in err and "Traceback" not in err, err
     last = err.strip().splitlines()[-1]
