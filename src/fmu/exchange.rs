@@ -78,7 +78,7 @@ impl Ramp {
 impl Exchange {
     /// The number of the model's states (without the filter's two).
     fn model_states(&self) -> usize {
-        self.x.len() - 2
+        self.x.len() - PhiFilter::STATES
     }
 
     /// The model's states.
@@ -89,7 +89,8 @@ impl Exchange {
     /// The filter's φ, φ′, φ″ at its states for its input now.
     pub fn filtered(&self) -> Phi {
         let m = self.model_states();
-        self.filter.phi(self.ramp.eval(self.t), [self.x[m], self.x[m + 1]])
+        let state = self.x[m..].try_into().expect("the filter's states end x");
+        self.filter.phi(self.ramp.eval(self.t), state)
     }
 
     /// The host's φ, φ′, φ″ (phi_source = input): as it sent them, or, if it sends φ alone,
@@ -240,12 +241,14 @@ impl BeamBodyFmu {
         let turned = eq.law().is_some_and(|law| t >= law.breakpoint());
         let range = eq.range_check();
         let filter = PhiFilter::new(self.values.settings.phi_filter_frequency);
-        // The filter starts at the host's φ, at rest (Modelica's initial equation).
+        // The filter starts at the host's φ, at rest; x holds only its states until the
+        // model's start, which reads them (φ alone from the host).
         let phi0 = self.values.input.phi;
+        let rest = PhiFilter::at_rest(phi0);
         let ramp = Ramp::at(t, phi0);
-        let mut ex = Exchange { eq, filter, t, x: vec![phi0, 0.0], ramp, turned, range };
+        let mut ex = Exchange { eq, filter, t, x: rest.to_vec(), ramp, turned, range };
         let mut x = ex.eq.start(ex.piece_of(&self.values)).map_err(|e| e.to_string())?;
-        x.extend([phi0, 0.0]);
+        x.extend(rest);
         ex.x = x;
         Ok(ex)
     }
@@ -349,7 +352,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
             // ExitInitializationMode, naming them).
             (None, Version::Fmi2) => STATES.len(),
             // FMI 3.0's: q and dq, 2·n_elements each, and the filter's two.
-            (None, Version::Fmi3) => 4 * self.values.settings.params.n_elements + 2,
+            (None, Version::Fmi3) => 4 * self.values.settings.params.n_elements + PhiFilter::STATES,
         }
     }
 
@@ -359,13 +362,14 @@ impl fmi::ModelExchange for BeamBodyFmu {
                 STATES.get(k).map_or_else(|| format!("x[{k}]"), |v| format!("`{}`", v.info().name))
             }
             Version::Fmi3 => {
-                let m = fmi::ModelExchange::state_count(self) - 2;
+                let m = fmi::ModelExchange::state_count(self) - PhiFilter::STATES;
                 let half = m / 2;
                 match k {
                     k if k < half => format!("x[{k}] (`q` element {k})"),
                     k if k < m => format!("x[{k}] (`dq` element {})", k - half),
                     k => {
-                        let var = STATES3.get(2 + k - m).map_or("?", |v| v.info().name);
+                        let first = STATES3.len() - PhiFilter::STATES;
+                        let var = STATES3.get(first + k - m).map_or("?", |v| v.info().name);
                         format!("x[{k}] (`{var}`)")
                     }
                 }
@@ -466,7 +470,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
         let nx = self.exchange().x.len();
         // Where each state variable's elements lie in x: the arrays q and dq hold a half each
         // of the model's states, the scalars one each.
-        let n_array = (nx - 2) / 2;
+        let n_array = (nx - PhiFilter::STATES) / 2;
         let mut spans = Vec::with_capacity(states.len());
         let mut at = 0;
         for v in states {

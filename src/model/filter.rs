@@ -23,6 +23,9 @@ pub struct PhiFilter {
 }
 
 impl PhiFilter {
+    /// Its states: the filtered φ and φ′.
+    pub const STATES: usize = 2;
+
     /// The filter of cut-off frequency `f_crit` [Hz] (positive and finite).
     pub fn new(f_crit: f64) -> Self {
         Self { w: 2.0 * std::f64::consts::PI * f_crit }
@@ -30,9 +33,14 @@ impl PhiFilter {
 
     /// The filtered φ, φ′, φ″ at the filter's state (φ, φ′) for the input `input`: the
     /// state's derivative is (φ′, φ″).
-    pub fn phi(&self, input: f64, state: [f64; 2]) -> Phi {
+    pub fn phi(&self, input: f64, state: [f64; Self::STATES]) -> Phi {
         let ddphi = ((input - state[0]) * self.w - A * state[1]) * (self.w / B);
         Phi { phi: state[0], dphi: state[1], ddphi }
+    }
+
+    /// Its state at rest at `phi` (Modelica's initial equation).
+    pub fn at_rest(phi: f64) -> [f64; Self::STATES] {
+        [phi, 0.0]
     }
 
     /// The delay of a slow input, a/ω [s].
