@@ -113,10 +113,7 @@ pub fn stale() -> Result<Vec<&'static str>> {
 /// `name`, with a choice's items: "`beam` (quadratic, exact)".
 fn named(s: &Setting) -> String {
     match s.kind {
-        Kind::Choice(ty) => {
-            let items: Vec<&str> = ty.items.iter().map(|(name, _)| *name).collect();
-            format!("`{}` ({})", s.name, items.join(", "))
-        }
+        Kind::Choice(ty) => format!("`{}` ({})", s.name, ty.names()),
         _ => format!("`{}`", s.name),
     }
 }
@@ -201,11 +198,15 @@ fn synopsis() -> String {
         items.extend(extra.iter().map(|s| s.to_string()));
         items
     };
-    let study =
-        ["[--cases A..B]", "[--threads N]", "[--scene FILE]", "[--max-cases N]", "[--quiet]"]
-            .map(String::from);
-    let mut study = study.to_vec();
-    study.push("[-o OUT.csv]".into());
+    let study = [
+        "[--cases A..B]",
+        "[--threads N]",
+        "[--scene FILE]",
+        "[--max-cases N]",
+        "[--quiet]",
+        "[-o OUT.csv]",
+    ]
+    .map(String::from);
     [
         "```sh".to_string(),
         wrap("beam-body simulate SCENE.toml", &with(&["[-o OUT.csv]"])),
