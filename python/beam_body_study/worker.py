@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import hashlib
 import os
+import signal
 import socket
 import subprocess
 import tempfile
 import time
 
-#: The CLI's exit status when a SIGINT or SIGTERM stopped it (the shell's code for SIGINT).
-INTERRUPTED_EXIT = 130
+#: The CLI's exit statuses when a SIGINT or SIGTERM stopped it: 130 (the shell's code for SIGINT)
+#: once its handler is installed; killed by the signal itself (subprocess's -2 or -15) when the
+#: signal came before the handler, in the first milliseconds of the process (seen in CI).
+INTERRUPTED_EXITS = (130, -signal.SIGINT, -signal.SIGTERM)
 
 #: sha256 of the binaries this process has run, by (path, size, mtime).
 _HASHES: dict = {}
@@ -77,7 +80,7 @@ def run_chunk(spec: dict, chunk: int, start: int, stop: int, threads: int = 1) -
         out = os.path.join(tmp, "rows.csv")
         cmd += ["--quiet", "-o", out]
         proc = subprocess.run(cmd, capture_output=True, text=True)
-        if proc.returncode == INTERRUPTED_EXIT:
+        if proc.returncode in INTERRUPTED_EXITS:
             # Ctrl-C reached the CLI (the terminal signals the whole process group): the run
             # is being interrupted, which the client reports as such, whichever sees it first.
             # A result, not an exception, which Dask's workers would log as a failed task.

@@ -353,6 +353,21 @@ def test_a_chunk_whose_cli_is_interrupted_interrupts_the_run(beam_body, tmp_path
     assert last.startswith("interrupted: ") and "run the same command again" in last, err
 
 
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_cli_killed_by_the_signal_before_its_handler_is_an_interrupted_chunk(tmp_path, sig):
+    """A CLI signalled in its first milliseconds, before it installs its handler, dies of the
+    signal itself (subprocess's -2 or -15, not 130): still an interrupted chunk, not a failed one
+    (CI once reported `exited with -2` as a failed chunk, exit 2)."""
+    from beam_body_study import worker
+
+    cli = tmp_path / "beam-body"
+    cli.write_text(f"#!/bin/sh\nkill -{int(sig)} $$\n")
+    cli.chmod(0o755)
+    spec = {"cli": str(cli), "cli_sha256": worker.file_sha256(str(cli)), "study_text": ""}
+    result = worker.run_chunk(spec, 3, 300, 400)
+    assert result["chunk"] == 3 and result["interrupted"], result
+
 # --- what makes kept chunks stale --------------------------------------------------------------
 
 SCENE = """
