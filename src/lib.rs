@@ -1,6 +1,7 @@
 //! The beam–body system of Russkikh & Shklyarchuk (2020): an inextensible elastic cantilever
-//! (Ritz, two coordinates v1, ϑ1) with a heavy rigid body hinged at its tip and turned
-//! through a large prescribed angle φ(t).
+//! with a heavy rigid body hinged at its tip and turned through a large prescribed angle
+//! φ(t); the beam by Ritz in n cubic Hermite elements (one: the paper's two coordinates v1,
+//! ϑ1), its nonlinearity cut at second order as in the paper or kept whole (the exact beam).
 //!
 //! - [`model`]: parameters, the four formulations, φ sources, hinge reactions. No I/O.
 //! - [`solver`]: our BDF integrator, generic over the system size. No I/O.
@@ -10,8 +11,9 @@
 //! - `study` (feature `cli`, on by default): design studies, many runs of one scene over
 //!   parameter grids and Latin hypercube samples, with metrics per run.
 //!
-//! The FMU sits on top of these: [`fmu`] binds the model to [`fmi`], the generic FMI core,
-//! and `fmi2` (the only `unsafe` code) exports the FMI 2.0 C API over it.
+//! The FMU sits on top of these: [`fmu`] binds the model to [`fmi`], the generic FMI core;
+//! `fmi2` and `fmi3` export the FMI 2.0 and 3.0 C APIs over it, on the C edge they share
+//! ([`capi`]). These three hold all the crate's `unsafe` code.
 //!
 //! ```
 //! use beam_body::sim::{simulate, Scene};

@@ -2,7 +2,7 @@
 //! get and set by value reference, the lifecycle and FMU state snapshots. Co-simulation's
 //! calls are in [`cosim`](super::cosim).
 //!
-//! An interface layer (`fmi2`) turns C pointers into slices and strings and calls these
+//! An interface layer (`fmi2`, `fmi3`) turns C pointers into slices and strings and calls these
 //! methods; everything else happens here or in the model. Each method logs its own errors
 //! through the instance's [`Logger`] and returns the status. No `unsafe`, no I/O.
 #![forbid(unsafe_code)]

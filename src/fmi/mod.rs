@@ -11,8 +11,8 @@
 //!   state snapshots. `cosim`: the co-simulation calls; `exchange`: Model Exchange's.
 //! - `snapshot`: what an FMU state holds, and its byte format.
 //!
-//! No `unsafe` and no I/O: an interface layer (`crate::fmi2`) turns the C calls into calls
-//! of [`Instance`], and the errors into C statuses once, at its edge.
+//! No `unsafe` and no I/O: the interface layers (`crate::fmi2`, `crate::fmi3`) turn the C
+//! calls into calls of [`Instance`], and the errors into C statuses once, at their edge.
 #![forbid(unsafe_code)]
 
 mod cosim;

@@ -1,6 +1,6 @@
 //! The FMI 2.0 interface, Model Exchange and Co-Simulation: a thin `extern "C"` layer over
-//! the generic core ([`crate::fmi`]) with the beam–body model ([`crate::fmu`]). All the
-//! crate's `unsafe` code is here.
+//! the generic core ([`crate::fmi`]) with the beam–body model ([`crate::fmu`]). With
+//! [`crate::fmi3`] and [`crate::capi`], it holds all the crate's `unsafe` code.
 //!
 //! - [`types`]: the C types.
 //! - [`exports`]: the 44 exported `fmi2…` functions (common, Model Exchange, co-simulation),

@@ -1,10 +1,10 @@
 //! Project tasks: `cargo xtask <command>`. See `cargo xtask help`.
 //!
 //! The alias runs the launcher (`xtask/launch`) first, which makes sure libclang is there for
-//! fmi-sys's bindgen, then this crate. Its dependencies: the interface tables of the library
-//! (`beam_body::fmu::variables`), quick-xml, zip, fmi (the native FMI host, with log and
-//! tempfile), libloading and nalgebra, and diffsol with the feature `bench` only (see
-//! Cargo.toml for why each).
+//! fmi-sys's bindgen, then this crate. Its dependencies: the library (its interface tables,
+//! `beam_body::fmu::variables`, and its scenes), quick-xml, zip, and fmi (the native FMI host,
+//! with log and tempfile); xtask/Cargo.toml says why each. The benchmarks are a crate of
+//! their own (bench/).
 
 use std::env;
 use std::process::ExitCode;
