@@ -126,16 +126,16 @@ pub fn check_outputs(inst: &mut Instance, records: &Records) {
         return;
     }
     // The scalars of the instance's model description (FMI 3.0's arrays are read by count).
-    let fmi3 = inst.api() == "fmi3";
+    let version = inst.api().version;
     let vrs: Vec<u32> = VARIABLES
         .iter()
-        .filter(|v| v.ty.base() == BaseType::Real && v.dims.is_empty() && v.in_version(fmi3))
+        .filter(|v| v.ty.base() == BaseType::Real && v.dims.is_empty() && v.in_version(version))
         .map(|v| v.vr())
         .collect();
     let mut out = vec![0.0; vrs.len()];
     let before = records.borrow().len();
     let status = inst.get_real(&vrs, &mut out);
-    let name = if inst.api() == "fmi3" { "fmi3GetFloat64" } else { "fmi2GetReal" };
+    let name = if inst.api().prefix == "fmi3" { "fmi3GetFloat64" } else { "fmi2GetReal" };
     check_status(name, status, records, before);
     if status == Status::Ok {
         for (vr, x) in vrs.iter().zip(&out) {

@@ -36,10 +36,10 @@ pub(crate) fn guard(c: Handle, func: &str, body: impl FnOnce(&mut Instance) -> S
     let Some(inst) = (unsafe { instance(c) }) else {
         return Status::Error as CStatus;
     };
-    if !func.starts_with(inst.api()) {
+    if !inst.api().owns(func) {
         let msg = format!(
             "{func}: this instance was made by {}Instantiate…: it takes that version's calls only",
-            inst.api()
+            inst.api().prefix
         );
         inst.log(Status::Error, &msg);
         return Status::Error as CStatus;

@@ -275,11 +275,7 @@ impl<M: CoSimulation> Instance<M> {
             self.core.last_successful_time = t;
             self.core.terminated = true;
             self.core.state = State::StepFailed;
-            let (last, terminated) = if f.is_fmi3() {
-                ("lastSuccessfulTime", "terminateSimulation")
-            } else {
-                ("fmi2LastSuccessfulTime", "fmi2Terminated")
-            };
+            let (last, terminated) = f.0.step_end;
             return Err(FmiError::discard(format!(
                 "{f}: {}. The FMU stopped at t = {t} ({last}), with {terminated} = true",
                 e.message
@@ -355,9 +351,8 @@ impl<M: CoSimulation> Instance<M> {
         let f = self.func("GetDirectionalDerivative");
         let r = self.cs_allowed(f, self.masks().get).and_then(|()| {
             Err(FmiError::error(format!(
-                "{f}: not provided in co-simulation (providesDirectionalDerivative{} = false); \
-                 Model Exchange provides it",
-                if f.is_fmi3() { "s" } else { "" }
+                "{f}: not provided in co-simulation ({} = false); Model Exchange provides it",
+                f.0.directional_flag
             )))
         });
         self.status(r)

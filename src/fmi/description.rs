@@ -152,9 +152,9 @@ pub enum BaseType {
 }
 
 impl BaseType {
-    /// Its name in FMI 3.0 (`fmi3` = true) or FMI 2.0.
-    pub fn name(self, fmi3: bool) -> &'static str {
-        match (self, fmi3) {
+    /// Its name in the model description of `version`.
+    pub fn name(self, version: Version) -> &'static str {
+        match (self, version == Version::Fmi3) {
             (BaseType::Real, true) => "Float64",
             (BaseType::Integer, true) => "Int32",
             (BaseType::Real, false) => "Real",
@@ -196,23 +196,23 @@ pub struct VarInfo {
 }
 
 impl VarInfo {
-    /// The type of the get and set functions that access it in FMI 3.0 (`fmi3`) or FMI 2.0:
+    /// The type of the get and set functions that access it in `version`: in FMI 3.0
     /// [`Type::base3`], and UInt64 for a structural parameter (FMI 3.0 §2.4.7.4: a
     /// `<Dimension>` refers to a UInt64).
-    pub fn base_in(&self, fmi3: bool) -> BaseType {
-        match (fmi3, self.structural) {
+    pub fn base_in(&self, version: Version) -> BaseType {
+        match (version == Version::Fmi3, self.structural) {
             (true, true) => BaseType::UInt64,
             (true, false) => self.ty.base3(),
             (false, _) => self.ty.base(),
         }
     }
 
-    /// Whether the model description of FMI 3.0 (`fmi3`) or FMI 2.0 holds it.
-    pub fn in_version(&self, fmi3: bool) -> bool {
+    /// Whether the model description of `version` holds it.
+    pub fn in_version(&self, version: Version) -> bool {
         match self.only {
             Only::Both => true,
-            Only::Fmi2 => !fmi3,
-            Only::Fmi3 => fmi3,
+            Only::Fmi2 => version == Version::Fmi2,
+            Only::Fmi3 => version == Version::Fmi3,
         }
     }
 }

@@ -36,16 +36,16 @@ impl<M: ModelExchange> Instance<M> {
     }
 
     /// Checks that the host's array of `n` elements has the model's size `size`.
-    fn check_count(f: super::instance::Func, what: &str, n: usize, size: usize) -> FmiResult<()> {
+    fn check_count(
+        f: super::instance::Func,
+        what: &'static str,
+        n: usize,
+        size: usize,
+    ) -> FmiResult<()> {
         if n == size {
             return Ok(());
         }
-        // FMI 3.0's names of the counts.
-        let what = match (what, f.is_fmi3()) {
-            ("nx", true) => "nContinuousStates",
-            ("ni", true) => "nEventIndicators",
-            _ => what,
-        };
+        let what = (f.0.count_name)(what);
         Err(FmiError::error(format!(
             "{f}: {what} = {n} is out of range: the model has {size} (the model description's \
              count)"
@@ -192,7 +192,7 @@ impl<M: ModelExchange> Instance<M> {
     /// an integrator's trial may reach) are refused with fmi2Discard, so that the host
     /// retries with a smaller step (FMI 2.0 §2.1.3).
     pub fn get_derivatives(&mut self, out: &mut [f64]) -> Status {
-        let allowed = if self.is_fmi3() { mask::EXCHANGE_ARRAYS3 } else { mask::DERIVATIVES };
+        let allowed = self.api().derivatives_mask;
         let r = self.exchange("GetDerivatives", allowed).and_then(|f| {
             self.started(f)?;
             Self::check_count(f, "nx", out.len(), self.core.model.state_count())?;
@@ -227,7 +227,7 @@ impl<M: ModelExchange> Instance<M> {
 
     /// GetNominalsOfContinuousStates.
     pub fn get_nominals(&mut self, out: &mut [f64]) -> Status {
-        let allowed = if self.is_fmi3() { mask::EXCHANGE_ARRAYS3 } else { mask::NOMINALS };
+        let allowed = self.api().nominals_mask;
         let r = self.exchange("GetNominalsOfContinuousStates", allowed).and_then(|f| {
             Self::check_count(f, "nx", out.len(), self.core.model.state_count())?;
             self.core.model.nominals(out);

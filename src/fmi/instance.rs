@@ -7,7 +7,8 @@
 //! through the instance's [`Logger`] and returns the status. No `unsafe`, no I/O.
 #![forbid(unsafe_code)]
 
-use super::description::{BaseType, Causality, Dim, VarInfo, Version, LOG_CATEGORIES};
+use super::api::Api;
+use super::description::{BaseType, Causality, Dim, Only, VarInfo, Version, LOG_CATEGORIES};
 use super::machine::{mask, FmiError, FmiResult, Interface, Masks, State, Status};
 use super::model::{Model, Notes, Setup, Value};
 use super::snapshot::{self, Snapshot};
@@ -39,59 +40,29 @@ pub type IntermediateUpdate = std::rc::Rc<dyn Fn(f64, bool)>;
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct LogFlags(pub(crate) [bool; LOG_CATEGORIES.len()]);
 
-/// A function's name in messages: the interface's prefix (`fmi2`) and the name (`DoStep`),
-/// joined only when a message is written.
+/// A function's name in messages: the interface (its prefix, `fmi2`, and its names) and the
+/// core's name of the function (FMI 2.0's, `DoStep`), joined only when a message is written.
 #[derive(Clone, Copy)]
-pub struct Func(pub &'static str, pub &'static str);
+pub struct Func(pub &'static Api, pub &'static str);
 
 impl Func {
-    /// Whether the function is FMI 3.0's.
-    pub fn is_fmi3(&self) -> bool {
-        self.0 == "fmi3"
-    }
-
-    /// The model description its version serves.
+    /// The model description its interface serves.
     pub fn version(&self) -> Version {
-        if self.is_fmi3() {
-            Version::Fmi3
-        } else {
-            Version::Fmi2
-        }
+        self.0.version
     }
 }
 
 impl fmt::Display for Func {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let name = if self.is_fmi3() { fmi3_name(self.1) } else { self.1 };
-        write!(f, "{}{}", self.0, name)
-    }
-}
-
-/// FMI 3.0's name of a function the core names as FMI 2.0 does: the same call, renamed.
-fn fmi3_name(name: &'static str) -> &'static str {
-    match name {
-        "GetFMUstate" => "GetFMUState",
-        "SetFMUstate" => "SetFMUState",
-        "FreeFMUstate" => "FreeFMUState",
-        "SerializedFMUstateSize" => "SerializedFMUStateSize",
-        "SerializeFMUstate" => "SerializeFMUState",
-        "DeSerializeFMUstate" => "DeserializeFMUState",
-        "GetReal" => "GetFloat64",
-        "SetReal" => "SetFloat64",
-        "GetInteger" => "GetInt32",
-        "SetInteger" => "SetInt32",
-        "GetDerivatives" => "GetContinuousStateDerivatives",
-        "GetRealOutputDerivatives" => "GetOutputDerivatives",
-        "NewDiscreteStates" => "UpdateDiscreteStates",
-        other => other,
+        write!(f, "{}{}", self.0.prefix, (self.0.rename)(self.1))
     }
 }
 
 /// One FMU instance.
 pub struct Instance<M> {
     name: String,
-    /// The prefix of the interface's function names, for messages.
-    api: &'static str,
+    /// The interface that made it: its function names and rules.
+    api: &'static Api,
     log: Logger,
     pub(crate) logging: LogFlags,
     pub(crate) core: Snapshot<M>,
@@ -144,10 +115,10 @@ fn listing<'a, M, T>(vrs: &'a [u32], values: &'a [T]) -> Listing<'a, M, T> {
 }
 
 impl<M: Model> Instance<M> {
-    /// A new instance called `name` of `interface`, whose functions start with `api`
-    /// (`fmi2`), after checking the name and the GUID. `None`, after logging why, otherwise.
+    /// A new instance called `name` of `interface`, made through `api`, after checking the
+    /// name and the GUID. `None`, after logging why, otherwise.
     pub fn instantiate(
-        api: &'static str,
+        api: &'static Api,
         interface: Interface,
         name: &str,
         guid: &str,
@@ -158,9 +129,9 @@ impl<M: Model> Instance<M> {
         let checked = if name.is_empty() {
             Err("instanceName is empty".to_string())
         } else if guid != M::guid() {
-            let what = if func.is_fmi3() { "instantiationToken" } else { "fmuGUID" };
             Err(format!(
-                "{what} {guid} does not match this binary's {}: wrong or stale FMU",
+                "{} {guid} does not match this binary's {}: wrong or stale FMU",
+                api.token,
                 M::guid()
             ))
         } else {
@@ -175,7 +146,7 @@ impl<M: Model> Instance<M> {
             api,
             log,
             logging: LogFlags([logging_on; LOG_CATEGORIES.len()]),
-            core: Snapshot::new(interface, Func(api, "").version()),
+            core: Snapshot::new(interface, api.version),
             intermediate_update: None,
             intermediate_outputs: false,
             intermediate_set: false,
@@ -200,14 +171,14 @@ impl<M: Model> Instance<M> {
         self.intermediate_update.clone()
     }
 
-    /// The prefix of its interface's function names: the FMI version that made it (`fmi2`).
-    pub fn api(&self) -> &'static str {
+    /// The interface that made it.
+    pub fn api(&self) -> &'static Api {
         self.api
     }
 
-    /// Whether FMI 3.0 made it.
-    pub(crate) fn is_fmi3(&self) -> bool {
-        self.api == "fmi3"
+    /// Its interface's name of `state`.
+    pub(crate) fn state_name(&self, state: State) -> &'static str {
+        (self.api.state_name)(state)
     }
 
     pub fn state(&self) -> State {
@@ -308,7 +279,7 @@ impl<M: Model> Instance<M> {
     /// Traces an FMU-state call with the instance's state and time afterwards.
     fn trace_state(&mut self, what: fmt::Arguments<'_>) {
         let (state, t) = (self.core.state, self.core.time);
-        trace!(self, "{what}: state `{}`, t = {t:?}", state.name_in(self.is_fmi3()));
+        trace!(self, "{what}: state `{}`, t = {t:?}", self.state_name(state));
     }
 
     /// FreeInstance: traces the call; the caller then drops the instance. Allowed in every
@@ -336,7 +307,7 @@ impl<M: Model> Instance<M> {
         if mask & state.bit() != 0 {
             return Ok(());
         }
-        Err(illegal(func, state.name_in(self.is_fmi3())))
+        Err(illegal(func, self.state_name(state)))
     }
 
     /// SetDebugLogging. `categories`: `None` where the host passed NULL or invalid UTF-8.
@@ -473,7 +444,7 @@ impl<M: Model> Instance<M> {
         let r = match self.allowed(f, allowed) {
             Ok(()) => {
                 self.core.state = to;
-                trace!(self, "{f}: state `{}`", to.name_in(true));
+                trace!(self, "{f}: state `{}`", self.state_name(to));
                 Ok(Status::Ok)
             }
             Err(e) => Err(FmiError::error(format!("{} ({why})", e.message))),
@@ -520,7 +491,7 @@ impl<M: Model> Instance<M> {
         self.core.terminated = false;
         let state = self.masks().initialized;
         self.core.state = state;
-        trace!(self, "{f}: started at t = {t0:?}, state `{}`", state.name_in(f.is_fmi3()));
+        trace!(self, "{f}: started at t = {t0:?}, state `{}`", (f.0.state_name)(state));
         Ok(Status::Ok)
     }
 
@@ -568,15 +539,15 @@ impl<M: Model> Instance<M> {
     /// Finds `vr` and checks it has base type `base`.
     #[inline]
     pub(crate) fn lookup(func: Func, vr: u32, base: BaseType) -> FmiResult<&'static VarInfo> {
-        let fmi3 = func.is_fmi3();
+        let version = func.version();
         match M::variable(vr) {
-            Some(info) if !info.in_version(fmi3) => Err(FmiError::error(format!(
+            Some(info) if !info.in_version(version) => Err(FmiError::error(format!(
                 "{func}: value reference {vr} (`{}`) is not in this version's model \
                  description: it is FMI {}'s only",
                 info.name,
-                if fmi3 { "2.0" } else { "3.0" }
+                if info.only == Only::Fmi2 { "2.0" } else { "3.0" }
             ))),
-            Some(info) if base == info.base_in(fmi3) => Ok(info),
+            Some(info) if base == info.base_in(version) => Ok(info),
             found => Err(bad_reference(func, vr, base, found, M::variable_count())),
         }
     }
@@ -834,13 +805,14 @@ impl<M: Model> Instance<M> {
                 inputs.join(", ")
             )));
         }
-        if f.is_fmi3() && info.structural != (state == State::ConfigurationMode) {
+        if f.0.configuration_mode && info.structural != (state == State::ConfigurationMode) {
             return Err(FmiError::error(if info.structural {
                 format!(
                     "{f}: cannot set `{}` in `{}`: it is a structural parameter, set only in \
-                     configuration mode (fmi3EnterConfigurationMode after instantiation)",
+                     configuration mode ({}EnterConfigurationMode after instantiation)",
                     info.name,
-                    state.name_in(true)
+                    (f.0.state_name)(state),
+                    f.0.prefix
                 )
             } else {
                 format!(
@@ -870,7 +842,7 @@ impl<M: Model> Instance<M> {
             _ => format!(
                 "it is a fixed parameter, settable only before {} (state is `{}`)",
                 self.func("ExitInitializationMode"),
-                state.name_in(f.is_fmi3())
+                (f.0.state_name)(state)
             ),
         };
         FmiError::error(format!("{f}: cannot set `{}`: {why}", info.name))
@@ -1008,7 +980,7 @@ impl<M: Model> Instance<M> {
                 .map(Box::new)
                 .map_err(|e| FmiError::error(format!("{f}: {e}")))?;
             let n = bytes.len();
-            let state = core.state.name_in(f.is_fmi3());
+            let state = (f.0.state_name)(core.state);
             trace!(self, "{f}: {n} bytes, a snapshot in state `{state}`");
             Ok(core)
         });
@@ -1041,10 +1013,10 @@ fn bad_reference(
     FmiError::error(match found {
         None => format!("{func}: unknown value reference {vr}: must be below {count}"),
         Some(info) => {
-            let fmi3 = func.is_fmi3();
-            let ty = info.base_in(fmi3);
+            let version = func.version();
+            let ty = info.base_in(version);
             let a = |name: &str| if name.starts_with('I') { "an" } else { "a" };
-            let (is, asked) = (ty.name(fmi3), base.name(fmi3));
+            let (is, asked) = (ty.name(version), base.name(version));
             format!(
                 "{func}: value reference {vr} is `{}`, {} {is} variable, not {} {asked}",
                 info.name,

@@ -50,16 +50,6 @@ impl State {
         1 << self as u32
     }
 
-    /// Its name in an FMI 3.0 instance's messages: FMI 3.0's Step Mode, and a step discarded
-    /// there; the others are FMI 2.0's names.
-    pub fn name_in(self, fmi3: bool) -> &'static str {
-        match (self, fmi3) {
-            (State::StepComplete, true) => "step mode",
-            (State::StepFailed, true) => "step discarded",
-            _ => self.name(),
-        }
-    }
-
     pub fn name(self) -> &'static str {
         match self {
             State::Instantiated => "instantiated",

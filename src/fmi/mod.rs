@@ -2,6 +2,8 @@
 //! through the traits of [`model`].
 //!
 //! - [`description`]: the types that describe an interface (variables, units, flags).
+//! - [`Api`]: what one FMI version changes in the names and rules, as data its interface
+//!   layer hands to the instance; the core never asks which version it serves.
 //! - [`model`]: the traits a model implements ([`Model`], [`CoSimulation`],
 //!   [`ModelExchange`]), and the values
 //!   that cross them.
@@ -15,6 +17,7 @@
 //! calls into calls of [`Instance`], and the errors into C statuses once, at their edge.
 #![forbid(unsafe_code)]
 
+mod api;
 mod cosim;
 pub mod description;
 mod exchange;
@@ -23,12 +26,14 @@ mod machine;
 pub mod model;
 mod snapshot;
 
+pub use api::Api;
 pub use cosim::{
     MAX_PARTS, STATUS_DO_STEP, STATUS_LAST_SUCCESSFUL_TIME, STATUS_PENDING, STATUS_TERMINATED,
 };
 pub use description::{BaseType, Dim, Only, VarInfo, Version, LOG_CATEGORIES};
 pub use exchange::{EventInfo, StepEnd};
 pub use instance::{Func, Instance, IntermediateUpdate, Logger};
+pub(crate) use machine::mask;
 pub use machine::{FmiError, FmiResult, Interface, State, Status};
 pub use model::{CoSimulation, Model, ModelExchange, Notes, Restore, Setup, StepFailure, Value};
 pub use snapshot::{

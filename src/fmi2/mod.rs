@@ -12,10 +12,23 @@ mod tests;
 pub mod types;
 
 pub use crate::capi::{Core, Instance};
-use crate::fmi::{Interface, Logger, Status};
+use crate::fmi::{mask, Api, Interface, Logger, State, Status, Version};
 
-/// The prefix of FMI 2.0's function names, for messages.
-pub const API: &str = "fmi2";
+/// FMI 2.0's interface as the core needs it: the core's names are FMI 2.0's.
+pub static API: Api = Api {
+    prefix: "fmi2",
+    version: Version::Fmi2,
+    rename: |name| name,
+    token: "fmuGUID",
+    state_name: State::name,
+    count_name: |name| name,
+    step_end: ("fmi2LastSuccessfulTime", "fmi2Terminated"),
+    directional_flag: "providesDirectionalDerivative",
+    // FMI 2.0 §3.2.3: the derivatives from event mode on, the nominals from instantiation.
+    derivatives_mask: mask::DERIVATIVES,
+    nominals_mask: mask::NOMINALS,
+    configuration_mode: false,
+};
 
 /// fmi2Instantiate in safe Rust: `None`, after logging why, for an empty name, a type that is
 /// neither Model Exchange nor co-simulation, or a GUID that is not this model's.
@@ -40,5 +53,5 @@ pub fn instantiate(
             return None;
         }
     };
-    Instance::instantiate(API, interface, name, guid, log, logging_on)
+    Instance::instantiate(&API, interface, name, guid, log, logging_on)
 }

@@ -19,12 +19,61 @@ pub mod types;
 
 pub use crate::capi::{Core, Instance};
 use crate::fmi::Model as _;
-use crate::fmi::{Interface, IntermediateUpdate, Logger, Status};
+use crate::fmi::{mask, Api, Interface, IntermediateUpdate, Logger, State, Status, Version};
 use crate::fmu::variables::{Var, VARIABLES};
 use crate::fmu::BeamBodyFmu;
 
-/// The prefix of FMI 3.0's function names, for messages.
-pub const API: &str = "fmi3";
+/// FMI 3.0's interface as the core needs it: its names of the calls, states and counts the
+/// core names as FMI 2.0 does, and its rules.
+pub static API: Api = Api {
+    prefix: "fmi3",
+    version: Version::Fmi3,
+    rename,
+    token: "instantiationToken",
+    state_name,
+    count_name: |name| match name {
+        "nx" => "nContinuousStates",
+        "ni" => "nEventIndicators",
+        other => other,
+    },
+    step_end: ("lastSuccessfulTime", "terminateSimulation"),
+    directional_flag: "providesDirectionalDerivatives",
+    // FMI 3.0 §3.2: the derivatives and nominals from initialization mode on, like the
+    // states and indicators (Reference-FMUs' masks).
+    derivatives_mask: mask::EXCHANGE_ARRAYS3,
+    nominals_mask: mask::EXCHANGE_ARRAYS3,
+    configuration_mode: true,
+};
+
+/// FMI 3.0's name of a function the core names as FMI 2.0 does: the same call, renamed.
+fn rename(name: &'static str) -> &'static str {
+    match name {
+        "GetFMUstate" => "GetFMUState",
+        "SetFMUstate" => "SetFMUState",
+        "FreeFMUstate" => "FreeFMUState",
+        "SerializedFMUstateSize" => "SerializedFMUStateSize",
+        "SerializeFMUstate" => "SerializeFMUState",
+        "DeSerializeFMUstate" => "DeserializeFMUState",
+        "GetReal" => "GetFloat64",
+        "SetReal" => "SetFloat64",
+        "GetInteger" => "GetInt32",
+        "SetInteger" => "SetInt32",
+        "GetDerivatives" => "GetContinuousStateDerivatives",
+        "GetRealOutputDerivatives" => "GetOutputDerivatives",
+        "NewDiscreteStates" => "UpdateDiscreteStates",
+        other => other,
+    }
+}
+
+/// FMI 3.0's name of a state: its Step Mode, and a step discarded there; the others are
+/// FMI 2.0's names.
+fn state_name(state: State) -> &'static str {
+    match state {
+        State::StepComplete => "step mode",
+        State::StepFailed => "step discarded",
+        other => other.name(),
+    }
+}
 
 /// What fmi3InstantiateCoSimulation takes beyond the common arguments.
 pub struct CoSimulationArgs<'a> {
@@ -65,7 +114,7 @@ pub fn instantiate(
             callback = cs.intermediate_update.map(|cb| (cb, outputs));
         }
     }
-    let mut inst = Instance::instantiate(API, interface, name, token, log, logging_on)?;
+    let mut inst = Instance::instantiate(&API, interface, name, token, log, logging_on)?;
     if let Some((cb, outputs)) = callback {
         inst.set_intermediate_update(cb, outputs);
     }

@@ -517,7 +517,7 @@ impl fmi::ModelExchange for BeamBodyFmu {
             let var = Var::from_vr(*vr).filter(|v| {
                 let info = v.info();
                 matches!(info.causality, Causality::Output | Causality::Local)
-                    && info.in_version(fmi3)
+                    && info.in_version(self.version)
             });
             let Some(var) = var else {
                 return Err(format!(

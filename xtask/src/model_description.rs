@@ -11,6 +11,7 @@
 use std::fs;
 use std::path::PathBuf;
 
+use beam_body::fmi::Version;
 use beam_body::fmu::variables::{
     self as vars, Causality, EnumType, Type, Variability, Variable, CAPABILITIES,
     DEFAULT_EXPERIMENT, ENUM_TYPES, EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS,
@@ -181,18 +182,18 @@ pub(crate) fn is_state(v: &Variable) -> bool {
 /// The 1-based `<ModelVariables>` index of the variable with value reference `vr`: FMI 2.0's
 /// list leaves out FMI 3.0's arrays, so the variables after them are not at `vr + 1`.
 pub fn index_of(vr: u32) -> usize {
-    variables(false).position(|v| v.vr() == vr).expect("a variable of FMI 2.0's list") + 1
+    variables(Version::Fmi2).position(|v| v.vr() == vr).expect("a variable of FMI 2.0's list") + 1
 }
 
 fn indices(keep: impl Fn(&Variable) -> bool) -> Vec<usize> {
-    variables(false).enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
+    variables(Version::Fmi2).enumerate().filter(|(_, v)| keep(v)).map(|(row, _)| row + 1).collect()
 }
 
-/// The variables of FMI 3.0's model description (`fmi3`) or FMI 2.0's, in value-reference
-/// order: FMI 3.0's arrays come after every variable both have, so FMI 2.0's 1-based
-/// indices are the same as without them.
-pub fn variables(fmi3: bool) -> impl Iterator<Item = &'static Variable> {
-    VARIABLES.iter().filter(move |v| v.in_version(fmi3))
+/// The variables of `version`'s model description, in value-reference order: FMI 3.0's
+/// arrays come after every variable both have, so FMI 2.0's 1-based indices are the same as
+/// without them.
+pub fn variables(version: Version) -> impl Iterator<Item = &'static Variable> {
+    VARIABLES.iter().filter(move |v| v.in_version(version))
 }
 
 /// The rules the tables must follow for the XML to be valid FMI 2.0 and 3.0, checked before
@@ -475,7 +476,7 @@ pub fn generate() -> Result<String> {
     write_categories_and_experiment(&mut doc)?;
 
     doc.start("ModelVariables", vec![]);
-    for v in variables(false) {
+    for v in variables(Version::Fmi2) {
         write_variable(&mut doc, v)?;
     }
     doc.end("ModelVariables");
@@ -772,8 +773,8 @@ pub(crate) mod tests {
     fn every_scalar_variable_matches_the_table() {
         let root = root();
         let elements = &root.child("ModelVariables").unwrap().children;
-        assert_eq!(elements.len(), super::variables(false).count());
-        for (e, v) in elements.iter().zip(super::variables(false)) {
+        assert_eq!(elements.len(), super::variables(beam_body::fmi::Version::Fmi2).count());
+        for (e, v) in elements.iter().zip(super::variables(beam_body::fmi::Version::Fmi2)) {
             let at = |what: &str| format!("variable {}: {what}", v.name);
             assert_eq!(e.name, "ScalarVariable");
             let a = attrs(
@@ -861,7 +862,7 @@ pub(crate) mod tests {
     fn model_structure_lists_outputs_derivatives_and_initial_unknowns() {
         let root = root();
         let rows = |keep: &dyn Fn(&vars::Variable) -> bool| -> Vec<usize> {
-            super::variables(false)
+            super::variables(beam_body::fmi::Version::Fmi2)
                 .enumerate()
                 .filter(|(_, v)| keep(v))
                 .map(|(r, _)| r + 1)
@@ -871,8 +872,9 @@ pub(crate) mod tests {
         let derivatives = rows(&|v| v.derivative_of.is_some());
         // The states too: the filter of φ's phi_filtered is a calculated local (the others
         // are outputs or derivatives).
-        let is_state =
-            |v: &vars::Variable| super::variables(false).any(|d| d.derivative_of == Some(v.vr()));
+        let is_state = |v: &vars::Variable| {
+            super::variables(beam_body::fmi::Version::Fmi2).any(|d| d.derivative_of == Some(v.vr()))
+        };
         let unknowns =
             rows(&|v| v.causality == Causality::Output || v.derivative_of.is_some() || is_state(v));
         assert_eq!(derivatives.len(), vars::DERIVATIVES.len());

@@ -21,6 +21,7 @@
 //!   (the outputs and the state derivatives; never the event indicators) and
 //!   `<EventIndicator>` (in the order of fmi3GetEventIndicators).
 
+use beam_body::fmi::Version;
 use beam_body::fmu::variables::{
     self as vars, Causality, Dim, Type, Var, Variability, Variable, CAPABILITIES, DERIVATIVES3,
     ENUM_TYPES, EXCHANGE_CAPABILITIES, FMI3_CAPABILITIES, INDICATOR_VARIABLES, INTERMEDIATE_INPUTS,
@@ -45,7 +46,10 @@ fn vrs(vars: &[Var]) -> Vec<u32> {
 
 /// The value references of the outputs, for `<Output>`, in value-reference order.
 pub fn output_vrs() -> Vec<u32> {
-    variables(true).filter(|v| v.causality == Causality::Output).map(Variable::vr).collect()
+    variables(Version::Fmi3)
+        .filter(|v| v.causality == Causality::Output)
+        .map(Variable::vr)
+        .collect()
 }
 
 /// The value references of the state derivatives, for `<ContinuousStateDerivative>`: the
@@ -57,7 +61,7 @@ pub fn derivative_vrs() -> Vec<u32> {
 /// The value references of the initial unknowns, for `<InitialUnknown>`: the outputs and the
 /// state derivatives, in value-reference order.
 pub fn initial_unknown_vrs() -> Vec<u32> {
-    variables(true).filter(|v| is_initial_unknown(v)).map(Variable::vr).collect()
+    variables(Version::Fmi3).filter(|v| is_initial_unknown(v)).map(Variable::vr).collect()
 }
 
 /// The value references of the event indicators, for `<EventIndicator>`, in the order of
@@ -68,8 +72,10 @@ pub fn event_indicator_vrs() -> Vec<u32> {
 
 /// The rules FMI 3.0 adds to FMI 2.0's ([`check_rules`]), over the whole table.
 fn check_rules3() -> Result {
-    let independent: Vec<&str> =
-        variables(true).filter(|v| v.causality == Causality::Independent).map(|v| v.name).collect();
+    let independent: Vec<&str> = variables(Version::Fmi3)
+        .filter(|v| v.causality == Causality::Independent)
+        .map(|v| v.name)
+        .collect();
     if independent.len() != 1 {
         return Err(format!(
             "FMI 3.0 needs exactly one independent variable; the table has {independent:?}"
@@ -101,7 +107,7 @@ fn check_rules3() -> Result {
     }
     // Model Exchange lists every state derivative, and only those.
     let with_derivative: Vec<u32> =
-        variables(true).filter(|v| v.derivative_of.is_some()).map(Variable::vr).collect();
+        variables(Version::Fmi3).filter(|v| v.derivative_of.is_some()).map(Variable::vr).collect();
     let mut listed = derivative_vrs();
     listed.sort_unstable();
     if listed != with_derivative {
@@ -117,7 +123,7 @@ fn check_rules3() -> Result {
 
 /// The whole FMI 3.0 modelDescription.xml.
 pub fn generate() -> Result<String> {
-    for v in variables(true) {
+    for v in variables(Version::Fmi3) {
         check_rules(v)?;
     }
     check_rules3()?;
@@ -176,7 +182,7 @@ pub fn generate() -> Result<String> {
     write_categories_and_experiment(&mut doc)?;
 
     doc.start("ModelVariables", vec![]);
-    for v in variables(true) {
+    for v in variables(Version::Fmi3) {
         write_variable(&mut doc, v)?;
     }
     doc.end("ModelVariables");
