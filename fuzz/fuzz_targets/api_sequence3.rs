@@ -89,7 +89,9 @@ impl Harness {
         check_outputs(&mut self.inst, &self.records);
     }
 
-    /// fmi3DoStep as the interface layer runs it with the host's callback.
+    /// fmi3DoStep as `Instance::do_step_in_parts` runs it with the host's callback, whose part
+    /// this plays: an op inside the callback needs the harness, which the instance's stored
+    /// callback cannot reach.
     fn step(&mut self, tc: f64, h: f64, phi: &[Num], inside: Option<&Op>) -> Status {
         let target = match self.inst.plan_step(tc, h) {
             Ok(t) => t,

@@ -20,6 +20,13 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
+/// The status a C status stands for (the values are FMI's; anything else would be a bug of
+/// ours, taken as Fatal).
+pub(crate) fn status_of(c: CStatus) -> Status {
+    use Status::*;
+    [Ok, Warning, Discard, Error, Fatal].get(c as usize).copied().unwrap_or(Fatal)
+}
+
 /// Runs `body` on the instance behind `c`. NULL or unknown `c` gives Error (there is no
 /// logger to tell). A panic is caught, logged, and makes the instance fatal.
 ///

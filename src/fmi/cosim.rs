@@ -153,10 +153,71 @@ impl<M: CoSimulation> Instance<M> {
         self.status(r)
     }
 
-    /// FMI 3.0's DoStep with intermediate update, first call: checks the step as
-    /// [`do_step`](Self::do_step) does and gives its end `tc + h`. The interface layer then
-    /// calls [`step_part`](Self::step_part) until the end, and the host's callback between
-    /// the parts.
+    /// DoStep of an interface whose host may ask for intermediate updates (FMI 3.0): with no
+    /// callback, [`do_step`](Self::do_step); with one, the step planned, then part by part
+    /// ([`step_part`](Self::step_part)) with the host's callback between them in intermediate
+    /// update mode, and the worst status of the parts. The host's callback calls back into the
+    /// instance, so no borrow of it may be alive then: the interface layer lends the instance
+    /// to each phase through `access`, which runs the phase on it and returns its status (the
+    /// layer's guard: finding the instance, catching a panic, writing the out-arguments).
+    pub fn do_step_in_parts(
+        tc: f64,
+        h: f64,
+        mut access: impl FnMut(&mut dyn FnMut(&mut Self) -> Status) -> Status,
+    ) -> Status {
+        let mut callback = None;
+        let status = access(&mut |inst| match inst.intermediate_update() {
+            None => inst.do_step(tc, h),
+            Some(cb) => {
+                callback = Some(cb);
+                Status::Ok
+            }
+        });
+        let Some(callback) = callback else {
+            return status;
+        };
+        let mut target = f64::NAN;
+        let planned = access(&mut |inst| match inst.plan_step(tc, h) {
+            Ok(t) => {
+                target = t;
+                Status::Ok
+            }
+            Err(status) => status,
+        });
+        if planned > Status::Warning {
+            return planned;
+        }
+        let mut worst = planned;
+        loop {
+            let (mut reached, mut t) = (true, f64::NAN);
+            let part = access(&mut |inst| {
+                let (status, end) = inst.step_part(target, h);
+                (reached, t) = (end, inst.time());
+                status
+            });
+            worst = worst.max(part);
+            if part > Status::Warning || reached {
+                return worst;
+            }
+            let mut set_requested = false;
+            let entered = access(&mut |inst| {
+                set_requested = inst.intermediate_set_requested();
+                inst.enter_intermediate_update()
+            });
+            if entered > Status::Warning {
+                return entered;
+            }
+            callback(t, set_requested);
+            let left = access(&mut |inst| inst.leave_intermediate_update());
+            if left > Status::Warning {
+                return left;
+            }
+        }
+    }
+
+    /// The first phase of [`do_step_in_parts`](Self::do_step_in_parts): checks the step as
+    /// [`do_step`](Self::do_step) does and gives its end `tc + h`. Public, with the phases
+    /// below, for the fuzz harness, which plays the host's part between them.
     pub fn plan_step(&mut self, tc: f64, h: f64) -> Result<f64, Status> {
         let f = self.func("DoStep");
         let r = self.check_step(f, tc, h).inspect(|_| {

@@ -11,7 +11,9 @@
 
 use super::types::*;
 use super::{CoSimulationArgs, Instance};
-use crate::capi::guard::{get_values, guard, null_arg, set_values, slice, slice_mut, text};
+use crate::capi::guard::{
+    get_values, guard, null_arg, set_values, slice, slice_mut, status_of, text,
+};
 use crate::capi::registry::{unregister_instance, with_registry};
 use crate::capi::{states, Core};
 use crate::fmi::description::BaseType;
@@ -1053,59 +1055,14 @@ pub unsafe extern "C" fn fmi3DoStep(
             null_arg(inst, F, arg, 1)
         });
     }
-    let mut callback = None;
-    let status = guard(instance, F, |inst| {
-        let status = match inst.intermediate_update() {
-            None => inst.do_step(tc, h),
-            Some(cb) => {
-                callback = Some(cb);
-                Status::Ok
-            }
-        };
-        outs.write(inst);
-        status
-    });
-    let Some(callback) = callback else {
-        return status;
-    };
-    let mut target = f64::NAN;
-    let planned = guard(instance, F, |inst| match inst.plan_step(tc, h) {
-        Ok(t) => {
-            target = t;
-            Status::Ok
-        }
-        Err(status) => status,
-    });
-    if planned > fmi3Warning {
-        return planned;
-    }
-    // Part by part (the model's intermediate spacing), the host's callback after each but
-    // the last.
-    let mut worst = planned;
-    loop {
-        let (mut reached, mut t) = (true, f64::NAN);
-        let part = guard(instance, F, |inst| {
-            let (status, end) = inst.step_part(target, h);
-            (reached, t) = (end, inst.time());
+    // Each phase of the step on the instance, its out-arguments written after it; the host's
+    // callback runs between phases, with no borrow of the instance alive.
+    Instance::do_step_in_parts(tc, h, |phase| {
+        let status = guard(instance, F, |inst| {
+            let status = phase(inst);
             outs.write(inst);
             status
         });
-        worst = worst.max(part);
-        if part > fmi3Warning || reached {
-            return worst;
-        }
-        let mut set_requested = false;
-        let entered = guard(instance, F, |inst| {
-            set_requested = inst.intermediate_set_requested();
-            inst.enter_intermediate_update()
-        });
-        if entered > fmi3Warning {
-            return entered;
-        }
-        callback(t, set_requested);
-        let left = guard(instance, F, Instance::leave_intermediate_update);
-        if left > fmi3Warning {
-            return left;
-        }
-    }
+        status_of(status)
+    }) as fmi3Status
 }
