@@ -3,7 +3,8 @@
 //! binary as FMI 2.0 (`BeamBody-fmi3.fmu` ships it in FMI 3.0's platform folders).
 //!
 //! - [`types`]: the C types.
-//! - [`exports`]: the 75 exported `fmi3…` functions, over the C edge both versions share
+//! - [`exports`]: the 75 exported `fmi3…` functions (the common ones; `values`, `exchange`
+//!   and `cosim` hold the rest, which it re-exports), over the C edge both versions share
 //!   ([`crate::capi`]: registry, guard, FMU states). Those the model does not provide
 //!   (scheduled execution, clocks, configuration mode, adjoint derivatives, variable
 //!   dependencies, types it has no variables of) return fmi3Error with a message that says
@@ -14,8 +15,11 @@
 //! host may hand over φ inside a step through its intermediate-update callback instead;
 //! co-simulation has no event mode (`hasEventMode = false`).
 
+mod cosim;
+mod exchange;
 pub mod exports;
 pub mod types;
+mod values;
 
 pub use crate::capi::{Core, Instance};
 use crate::fmi::Model as _;
