@@ -43,13 +43,13 @@ use beam_body::fmu::variables::{Var, DEFAULT_EXPERIMENT, MODEL_IDENTIFIER, PHI_S
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipArchive, ZipWriter};
 
+use crate::descriptions::Description;
 use crate::import::{Call, CoSimulation, Common, Fmi2Error, Fmu2, InstanceCS};
-use crate::model_description::Description;
 use crate::platforms::{self, Archive};
 use crate::summary::{sig, Table};
 use crate::{
-    build_release_binary, docs, model_description, project_root, relative, run_cmd, summary,
-    target_dir, Result,
+    build_release_binary, descriptions, docs, project_root, relative, run_cmd, summary, target_dir,
+    Result,
 };
 
 /// The outputs that the host records and compares, in CSV column order after `t`.
@@ -77,7 +77,7 @@ pub fn build_package(all: bool) -> Result<Packages> {
 /// [`build_package`] into `out_dir`: the benchmark and the sweep package this machine's FMU
 /// apart, so that they leave `target/fmu/` (all platforms after `cargo xtask test`) alone.
 pub fn build_package_in(out_dir: &Path, all: bool) -> Result<Packages> {
-    model_description::check_fresh()?;
+    descriptions::check_fresh()?;
     fs::create_dir_all(out_dir)
         .map_err(|err| format!("cannot create {}: {err}", relative(out_dir)))?;
     let built = platforms::build(all)?;
@@ -106,7 +106,7 @@ pub fn build_package_in(out_dir: &Path, all: bool) -> Result<Packages> {
 }
 
 pub fn run(all: bool) -> Result {
-    model_description::check_fresh()?;
+    descriptions::check_fresh()?;
     let out_dir = target_dir().join("fmu");
     fs::create_dir_all(&out_dir)
         .map_err(|err| format!("cannot create {}: {err}", relative(&out_dir)))?;

@@ -6,6 +6,7 @@
 // machine, while the library uses `beam_body::math` (clippy.toml).
 #![allow(clippy::disallowed_methods)]
 
+pub mod descriptions;
 pub mod docs;
 pub mod fmu;
 pub mod fuzz;

@@ -8,7 +8,7 @@
 
 use std::env;
 use std::process::ExitCode;
-use xtask::{fmu, model_description, study, test, Result};
+use xtask::{descriptions, fmu, study, test, Result};
 
 const HELP: &str = "\
 Usage: cargo xtask <command> [options]
@@ -174,7 +174,7 @@ fn run(args: &[String]) -> Result {
         "test" => test::run(test::Scope::parse(options)?),
         "gen" => {
             no_options(command, options)?;
-            model_description::run()
+            descriptions::run()
         }
         "fmu" => match options {
             [] => fmu::run(false),

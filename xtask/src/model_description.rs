@@ -8,9 +8,6 @@
 //! now, byte for byte, and read back with quick-xml it must say what the tables say.
 //! `cargo xtask fmu` refuses to package a stale file.
 
-use std::fs;
-use std::path::PathBuf;
-
 use beam_body::fmi::Version;
 use beam_body::fmu::variables::{
     self as vars, Causality, EnumType, Type, Variability, Variable, CAPABILITIES,
@@ -21,86 +18,7 @@ use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 
 use crate::xml::escape_attr;
-use crate::{model_description3, project_root, relative, Result};
-
-/// A committed model description: where it lives and what writes it.
-pub struct Description {
-    /// The file, relative to the project root.
-    pub relative_path: &'static str,
-    /// The whole file, from the tables.
-    pub generate: fn() -> Result<String>,
-}
-
-/// FMI 2.0's modelDescription.xml (this module's [`generate`]).
-pub const FMI2: Description =
-    Description { relative_path: "modelDescription/modelDescription.xml", generate };
-/// FMI 3.0's modelDescription.xml ([`model_description3::generate`]).
-pub const FMI3: Description = Description {
-    relative_path: model_description3::RELATIVE_PATH,
-    generate: model_description3::generate,
-};
-/// Every description `cargo xtask gen` writes and `cargo xtask fmu` checks.
-pub const DESCRIPTIONS: [Description; 2] = [FMI2, FMI3];
-
-impl Description {
-    pub fn path(&self) -> PathBuf {
-        project_root().join(self.relative_path)
-    }
-
-    /// The error unless the committed file is exactly what the generator writes now.
-    pub fn check_fresh(&self) -> Result {
-        let expected = (self.generate)()?;
-        let path = self.path();
-        match fs::read_to_string(&path) {
-            Ok(actual) if actual == expected => Ok(()),
-            Ok(_) => Err(self.stale_message().into()),
-            Err(err) => {
-                Err(format!("cannot read {}: {err}; run `cargo xtask gen`", relative(&path)).into())
-            }
-        }
-    }
-
-    pub fn stale_message(&self) -> String {
-        format!("{} is stale: run `cargo xtask gen`", self.relative_path)
-    }
-
-    /// Writes the file if it changed.
-    fn update(&self) -> Result {
-        let text = (self.generate)()?;
-        let path = self.path();
-        let old = fs::read_to_string(&path).ok();
-        if old.as_deref() == Some(text.as_str()) {
-            println!("{} is up to date (guid {})", relative(&path), vars::guid());
-            return Ok(());
-        }
-        fs::create_dir_all(path.parent().expect("the path has a directory"))
-            .map_err(|err| format!("cannot create the directory of {}: {err}", relative(&path)))?;
-        fs::write(&path, &text)
-            .map_err(|err| format!("cannot write {}: {err}", relative(&path)))?;
-        let verb = if old.is_some() { "updated" } else { "created" };
-        println!("{verb} {} (guid {})", relative(&path), vars::guid());
-        Ok(())
-    }
-}
-
-/// `cargo xtask gen`: both model descriptions, and the docs' generated lists
-/// ([`crate::generated`]).
-pub fn run() -> Result {
-    crate::generated::update()?;
-    for description in &DESCRIPTIONS {
-        description.update()?;
-    }
-    Ok(())
-}
-
-/// The error unless every committed model description is exactly what its generator writes
-/// now.
-pub fn check_fresh() -> Result {
-    for description in &DESCRIPTIONS {
-        description.check_fresh()?;
-    }
-    Ok(())
-}
+use crate::Result;
 
 /// A real as the XML writes it: the shortest decimal string that parses back to the same
 /// f64 (xs:double accepts both forms): Rust's `Display` ("0.000001", "3.141592653589793")
@@ -534,7 +452,8 @@ pub(crate) mod tests {
         EVENT_INDICATORS, EXCHANGE_CAPABILITIES, LOG_CATEGORIES, UNITS,
     };
 
-    use super::{generate, real, Description, FMI2};
+    use super::{generate, real};
+    use crate::descriptions::{Description, FMI2};
     use crate::xml::Element;
 
     /// The committed text of `description`.

@@ -296,8 +296,8 @@ mod tests {
     };
 
     use super::generate;
+    use crate::descriptions::{FMI2, FMI3};
     use crate::model_description::tests::{attrs, committed, f64_of, root_of};
-    use crate::model_description::{FMI2, FMI3};
     use crate::xml::Element;
 
     fn root() -> Element {

@@ -31,7 +31,7 @@ use std::time::Instant;
 
 use beam_body::fmu::variables::MODEL_IDENTIFIER;
 
-use crate::model_description::{self, Description};
+use crate::descriptions::{self, Description};
 use crate::{cargo, project_root, relative, run_cmd, system, target_dir, Result};
 
 /// The FMI 2.0 `binaries/` folder of the host build (the machine xtask runs on).
@@ -160,7 +160,7 @@ pub const FMI3_FILE: &str = "BeamBody-fmi3.fmu";
 pub const ARCHIVES: [Archive; 3] = [
     Archive {
         file: MAIN_FILE,
-        description: &model_description::FMI2,
+        description: &descriptions::FMI2,
         binaries: &[
             ("linux64", Source::Host),
             ("win64", Source::Cross(Cross::Win64)),
@@ -171,7 +171,7 @@ pub const ARCHIVES: [Archive; 3] = [
     },
     Archive {
         file: AARCH64_LINUX_FILE,
-        description: &model_description::FMI2,
+        description: &descriptions::FMI2,
         binaries: &[
             ("linux64", Source::Cross(Cross::LinuxAarch64)),
             ("aarch64-linux", Source::Cross(Cross::LinuxAarch64)),
@@ -179,7 +179,7 @@ pub const ARCHIVES: [Archive; 3] = [
     },
     Archive {
         file: FMI3_FILE,
-        description: &model_description::FMI3,
+        description: &descriptions::FMI3,
         binaries: &[
             ("x86_64-linux", Source::Host),
             ("x86_64-windows", Source::Cross(Cross::Win64)),
@@ -194,12 +194,12 @@ pub const ARCHIVES: [Archive; 3] = [
 pub const HOST_ARCHIVES: [Archive; 2] = [
     Archive {
         file: MAIN_FILE,
-        description: &model_description::FMI2,
+        description: &descriptions::FMI2,
         binaries: &[(HOST_FOLDER, Source::Host)],
     },
     Archive {
         file: FMI3_FILE,
-        description: &model_description::FMI3,
+        description: &descriptions::FMI3,
         binaries: &[(HOST_TUPLE, Source::Host)],
     },
 ];
@@ -509,7 +509,7 @@ mod tests {
     #[test]
     fn the_fmi3_archive_has_every_platform_in_its_tuple() {
         let fmi3 = ARCHIVES.iter().find(|a| a.file == FMI3_FILE).unwrap();
-        assert_eq!(fmi3.description.relative_path, model_description::FMI3.relative_path);
+        assert_eq!(fmi3.description.relative_path, descriptions::FMI3.relative_path);
         let expected = [
             ("x86_64-linux", Source::Host),
             ("x86_64-windows", Source::Cross(Cross::Win64)),
@@ -519,15 +519,15 @@ mod tests {
         ];
         assert_eq!(fmi3.binaries, expected);
         for archive in ARCHIVES.iter().filter(|a| a.file != FMI3_FILE) {
-            assert_eq!(archive.description.relative_path, model_description::FMI2.relative_path);
+            assert_eq!(archive.description.relative_path, descriptions::FMI2.relative_path);
         }
         let host: Vec<_> =
             HOST_ARCHIVES.iter().map(|a| (a.file, a.description.relative_path)).collect();
         assert_eq!(
             host,
             [
-                (MAIN_FILE, model_description::FMI2.relative_path),
-                (FMI3_FILE, model_description::FMI3.relative_path)
+                (MAIN_FILE, descriptions::FMI2.relative_path),
+                (FMI3_FILE, descriptions::FMI3.relative_path)
             ]
         );
         assert_eq!(HOST_ARCHIVES[1].binaries, [(HOST_TUPLE, Source::Host)]);
