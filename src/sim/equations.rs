@@ -4,7 +4,7 @@
 //! (t, x). The same model and systems [`Run`](super::Run) steps; only the integrator differs.
 #![forbid(unsafe_code)]
 
-use super::run::two_dof;
+use super::systems::{build_model, two_dof};
 use super::SimError;
 use crate::model::{
     BeamBody, BeamN, Formulation, Kinematics, PaperLaw, Phi, PhiPiece, Poly, RangeCheck,
@@ -12,21 +12,6 @@ use crate::model::{
 use crate::scene::{InitialState, PhiSource, Scene};
 use crate::solver::{OdeSystem, RangeViolation};
 use nalgebra::{DVector, Vector4};
-
-/// The model a scene describes: the paper's two coordinates on the stack, or the beam in n
-/// elements (damped, exact) on the heap. The one construction [`Run::start`](super::Run) and
-/// [`Equations::new`] share.
-pub(super) fn build_model(
-    scene: &Scene,
-    phi0: f64,
-) -> Result<(BeamBody, Option<Box<BeamN>>), SimError> {
-    let model = scene.check_model(phi0).map_err(SimError::Setting)?;
-    let elements = (!scene.params.is_paper_model())
-        .then(|| BeamN::new(scene.params, scene.formulation).map(Box::new))
-        .transpose()
-        .map_err(SimError::Setting)?;
-    Ok((model, elements))
-}
 
 /// A scene's equations in state-space form, for a host's integrator.
 #[derive(Clone, Debug)]

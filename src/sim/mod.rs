@@ -17,10 +17,12 @@ pub use crate::scene::{InitialState, PhiSource, Scene};
 mod balance;
 mod equations;
 mod run;
+mod systems;
 
 pub use balance::{Unstable, MAX_RELATIVE, RTOL_FACTOR};
 pub use equations::Equations;
-pub use run::{dae, dae_start, elements_system, two_dof, two_dof_start, PhiInput, Run};
+pub use run::{PhiInput, Run};
+pub use systems::{dae, dae_start, elements_system, two_dof, two_dof_start};
 
 /// Why a run failed.
 #[derive(Clone, Debug, PartialEq)]

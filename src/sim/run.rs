@@ -4,18 +4,18 @@
 #![forbid(unsafe_code)]
 
 use super::balance::{self, EnergyMonitor};
+use super::systems::{build_model, dae, dae_start, two_dof, two_dof_start};
 use super::SimError;
 use crate::math;
 use crate::model::{
-    BeamBody, BeamBodyN, BeamN, DaeSystem, ElementsSystem, Energy, EnergyBalance, Formulation,
-    HostSignal, Kinematics, Outputs, PaperLaw, Phi, PhiPiece, Poly, Power, RangeCheck, Sample,
-    SystemN, TwoDofSystem,
+    BeamBody, BeamN, DaeSystem, Energy, EnergyBalance, Formulation, HostSignal, Kinematics,
+    Outputs, PaperLaw, Phi, PhiPiece, Poly, Power, RangeCheck, Sample, SystemN, TwoDofSystem,
 };
 use crate::scene::{InitialState, PhiSource, Scene};
 use crate::solver::{Bdf, BdfConfig, OdeSystem, RangeViolation, SolverError, Stats, StepOutcome};
 use crate::visit::StateVisitor;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, Dim, Dyn, OVector, SVector, U4, U6};
+use nalgebra::{DefaultAllocator, Dim, Dyn, OVector, U4, U6};
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
 /// one, so boxing would only add an indirection to every piece.
@@ -135,38 +135,6 @@ where
     bdf.advance_with(sys, tout, tstop, after)
 }
 
-/// The system of the four-state formulations (reduced, linear) on piece `phi`: the one step
-/// from a formulation to its equations, for the driver and the benchmark's peers.
-pub fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
-    TwoDofSystem { model, phi, linear: formulation == Formulation::Linear, range_check: true }
-}
-
-/// The system of the beam in n elements on piece `phi`.
-pub fn elements_system(
-    model: &BeamBodyN,
-    phi: PhiPiece,
-    formulation: Formulation,
-) -> ElementsSystem<'_> {
-    ElementsSystem { model, phi, formulation, range_check: true }
-}
-
-/// The system of the six-state formulations (dae, dae_stabilized) on piece `phi`.
-pub fn dae(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> DaeSystem<'_> {
-    let stabilized = formulation == Formulation::DaeStabilized;
-    DaeSystem { model, phi, stabilized, range_check: true }
-}
-
-/// The four-state formulations' initial state (v1, ϑ1, v̇1, ϑ̇1).
-pub fn two_dof_start(init: &InitialState) -> SVector<f64, 4> {
-    SVector::<f64, 4>::new(init.v1, init.theta1, init.dv1, init.dtheta1)
-}
-
-/// The DAE's initial state: u2 and u̇2 made consistent with the constraint of `system`.
-pub fn dae_start(system: &DaeSystem<'_>, init: &InitialState) -> SVector<f64, 6> {
-    let free = SVector::<f64, 6>::new(init.v1, init.theta1, 0.0, init.dv1, init.dtheta1, 0.0);
-    system.consistent(&free)
-}
-
 /// The paper's model: four states (reduced, linear) or six (dae, dae_stabilized), on the
 /// stack. The variants differ by 0.5 kB; a run holds one, so boxing would only add an
 /// indirection to every step. The beam in n elements: 4n or 4n + 2 states, on the heap.
@@ -185,7 +153,7 @@ impl Run {
     pub fn start(scene: &Scene, t0: f64, first: Sample, max_steps: u64) -> Result<Run, SimError> {
         let input = scene.phi_source == PhiSource::Input;
         let phi0 = if input { first.phi } else { scene.law.eval(t0).phi };
-        let (model, elements) = super::equations::build_model(scene, phi0)?;
+        let (model, elements) = build_model(scene, phi0)?;
         let (formulation, init) = (scene.formulation, scene.initial);
         let config = scene.solver_config(max_steps);
         let mut run = if input {
