@@ -8,6 +8,7 @@
 
 mod args;
 mod interrupt;
+mod location;
 mod modes;
 mod output;
 mod progress;

@@ -1,6 +1,6 @@
 //! `beam-body study`: a design study on every core, one CSV row per case.
 
-use crate::args::at_file;
+use crate::location::at_file;
 use crate::output::Output;
 use crate::progress::Progress;
 use crate::{interrupt, note, print, CmdResult, Failure};
