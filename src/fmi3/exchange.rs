@@ -3,9 +3,8 @@
 #![allow(unsafe_code)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-use super::exports::NO_EVENT_MODE;
 use super::types::*;
-use super::Instance;
+use super::{Instance, NO_EVENT_MODE};
 use crate::capi::guard::{guard, null_arg, slice, slice_mut};
 use crate::fmi::{Interface, Status};
 

@@ -10,7 +10,7 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 use super::types::*;
-use super::{CoSimulationArgs, Instance};
+use super::{CoSimulationArgs, Instance, NO_EVENT_MODE};
 use crate::capi::guard::{guard, null_arg, slice, slice_mut, text};
 use crate::capi::registry::{unregister_instance, with_registry};
 use crate::capi::{states, Core};
@@ -294,11 +294,6 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
 pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
     guard(instance, "fmi3ExitInitializationMode", Instance::exit_initialization_mode)
 }
-
-/// Co-simulation has no event mode (hasEventMode = false): its event calls are refused.
-pub(super) const NO_EVENT_MODE: &str =
-    "this FMU's co-simulation has no event mode (hasEventMode = \
-    false); it is a Model Exchange function here";
 
 /// # Safety
 /// `instance` is an instance from fmi3Instantiate….

@@ -79,6 +79,11 @@ fn state_name(state: State) -> &'static str {
     }
 }
 
+/// Co-simulation has no event mode (hasEventMode = false): its event calls are refused.
+pub(crate) const NO_EVENT_MODE: &str =
+    "this FMU's co-simulation has no event mode (hasEventMode = \
+    false); it is a Model Exchange function here";
+
 /// What fmi3InstantiateCoSimulation takes beyond the common arguments.
 pub struct CoSimulationArgs<'a> {
     pub event_mode_used: bool,

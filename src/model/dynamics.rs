@@ -11,7 +11,7 @@
 //! C̈ = J_C q̈ + b, b the velocity and φ'' terms. The Python oracle re-derives all of this
 //! symbolically from the energies and checks the residuals below at random states.
 
-use super::dynamics_n::negative_jacobian;
+use super::differences::negative_jacobian;
 use super::kinematics::{pq, u1_accel_bias};
 use super::params::{ParamError, Params};
 use super::phi::Phi;

@@ -36,7 +36,8 @@
 //! discretisation, and the energy of the discrete model is conserved exactly.
 
 use super::dense::{cholesky_in_place, cholesky_solve};
-use super::dynamics_n::{negative_jacobian, rest, small_oscillations, BeamBodyN, MAX_ELEMENTS};
+use super::differences::negative_jacobian;
+use super::dynamics_n::{rest, small_oscillations, BeamBodyN, MAX_ELEMENTS};
 use super::elements::shape;
 use super::params::Params;
 use super::phi::Phi;

@@ -7,6 +7,7 @@ mod balance;
 mod band;
 mod beam_n;
 mod dense;
+mod differences;
 mod dynamics;
 mod dynamics_n;
 mod elements;
