@@ -5,8 +5,9 @@ refactoring changed no result.
     python scripts/same_trajectories.py cli OLD/beam-body NEW/beam-body [--simulate-only]
 
 FMU: FMPy runs of every formulation with the law, and with the input fed from the law's values
-and derivatives (phi_source = input), at two tolerances; every output at every communication
-point must be equal as doubles. CLI: `simulate` on the regression scenes and the first 200 cases
+and derivatives (phi_source = input), at two tolerances; 3 elements, quadratic and exact; Model
+Exchange (FMI 2.0, and FMI 3.0 from the FMU beside it named -fmi3); every output at every
+communication point must be equal as doubles. CLI: `simulate` on the regression scenes and the first 200 cases
 of each example study, stdout byte for byte; `--simulate-only` leaves out the studies (against a
 build before 2026-12-04, whose study metrics came from the output grid, not the dense output).
 Exit code 0 when all agree, 1 with the first difference otherwise.
@@ -39,11 +40,24 @@ def fmu_runs(path: str):
         yield (name, 1e-6, "input"), fmpy.simulate_fmu(
             path, start_values={"formulation": f, "phi_source": 1}, stop_time=3.0,
             output_interval=0.0085, input=signal, output=OUTPUTS)
+    # The beam in 3 elements, quadratic and exact, in co-simulation.
+    for beam in (1, 2):
+        yield ("elements", beam), fmpy.simulate_fmu(
+            path, start_values={"phi_source": 2, "n_elements": 3, "beam": beam}, stop_time=1.0,
+            output_interval=0.0085, output=OUTPUTS)
+    # Model Exchange with the host's integrator (FMPy's CVODE), FMI 2.0 and, if the FMU of the
+    # same name with -fmi3 is there, 3.0: the paper's model (simulate_fmu cannot set FMI 3.0's
+    # structural n_elements; tests/python/fmu/test_fmu3_arrays.py runs elements).
+    fmi3 = Path(path).with_name(Path(path).stem + "-fmi3.fmu")
+    for fmu in [path] + ([str(fmi3)] if fmi3.exists() else []):
+        yield ("model exchange", Path(fmu).name), fmpy.simulate_fmu(
+            fmu, fmi_type="ModelExchange", start_values={"phi_source": 2}, stop_time=2.0,
+            output_interval=0.0085, output=OUTPUTS)
 
 
 def compare_fmus(old: str, new: str) -> int:
     runs = 0
-    for (key, a), (_, b) in zip(fmu_runs(old), fmu_runs(new)):
+    for (key, a), (_, b) in zip(fmu_runs(old), fmu_runs(new), strict=True):
         for column in OUTPUTS:
             if not (a[column].tobytes() == b[column].tobytes()):
                 print(f"differ: {key} {column}")
@@ -64,6 +78,14 @@ SCENES = [
     ("paper.toml", ["--set", "EI=1e7", "--set", "t_end=2"]),
     ("paper.toml", ["--fixed-step", "1e-3", "--fixed-order", "3", "--set", "t_end=3"]),
     ("paper.toml", ["--rtol", "1e-9", "--set", "t_end=3"]),
+    ("paper.toml", ["--elements", "4", "--set", "t_end=2", "--columns", "shape"]),
+    ("paper.toml", ["--elements", "3", "--formulation", "dae", "--set", "t_end=2"]),
+    ("paper.toml", ["--elements", "3", "--formulation", "dae_stabilized", "--set", "t_end=2"]),
+    ("paper.toml", ["--elements", "3", "--formulation", "linear", "--set", "t_end=2"]),
+    ("paper.toml", ["--elements", "3", "--beam", "exact", "--set", "t_end=1", "--columns", "shape"]),
+    ("paper.toml", ["--elements", "2", "--set", "damping_ratio=0.02", "--set", "t_end=2"]),
+    ("paper.toml", ["--set", "phi_source=input", "--set", "t_end=2"]),
+    ("paper.toml", ["--set", "phi_source=input", "--elements", "3", "--set", "t_end=1"]),
 ]
 
 

@@ -177,8 +177,7 @@ impl Exchange {
     /// and π/2 − |ϑ1|; `None` with the check off, or for the exact beam, whose one limit (a
     /// centreline that crosses itself) is checked at each step's end.
     fn margins(&self) -> Option<[f64; 2]> {
-        let exact = self.eq.elements().is_some_and(|e| matches!(e, crate::model::BeamN::Exact(_)));
-        if self.range == RangeCheck::Off || exact {
+        if self.range == RangeCheck::Off || !self.eq.tip_limits() {
             return None;
         }
         let (v1, theta1) = self.eq.tip(self.model_x());

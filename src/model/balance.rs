@@ -39,7 +39,6 @@ use super::phi::Phi;
 use super::systems::{DaeSystem, TwoDofSystem};
 use super::systems_exact::ExactSystem;
 use super::systems_n::ElementsSystem;
-use super::SystemN;
 use crate::math;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, Dim, Dyn, OVector, Vector2, U4, U6};
@@ -376,40 +375,10 @@ impl EnergyBalance<Dyn> for ExactSystem<'_> {
     }
 }
 
-impl EnergyBalance<Dyn> for SystemN<'_> {
-    fn phi(&self, t: f64) -> Phi {
-        match self {
-            SystemN::Quadratic(s) => s.phi(t),
-            SystemN::Exact(s) => s.phi(t),
-        }
-    }
-
-    fn passive(&self, phi: &Phi) -> bool {
-        match self {
-            SystemN::Quadratic(s) => s.passive(phi),
-            SystemN::Exact(s) => s.passive(phi),
-        }
-    }
-
-    fn power(&self, phi: &Phi, y: &DVector<f64>, dy: &DVector<f64>) -> Power {
-        match self {
-            SystemN::Quadratic(s) => s.power(phi, y, dy),
-            SystemN::Exact(s) => s.power(phi, y, dy),
-        }
-    }
-
-    fn energy(&self, t: f64, y: &DVector<f64>) -> Energy {
-        match self {
-            SystemN::Quadratic(s) => s.energy(t, y),
-            SystemN::Exact(s) => s.energy(t, y),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{BeamModel, BeamN, PaperLaw, PhiPiece};
+    use crate::model::{BeamModel, ExactBeam, PaperLaw, PhiPiece};
     use crate::solver::OdeSystem;
 
     /// dE/dt along the flow at (t, y), by central differences of the energy at (t ± ε,
@@ -519,8 +488,8 @@ mod tests {
             damping_ratio: 0.02,
             ..Params::default()
         };
-        let model = BeamN::new(params, Formulation::Reduced).unwrap();
-        let sys = model.system(turn(), Formulation::Reduced, true);
+        let model = ExactBeam::new(params).unwrap();
+        let sys = ExactSystem { model: &model, phi: turn(), range_check: true };
         check(&sys, T, &state(3, 0));
     }
 }

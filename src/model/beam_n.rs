@@ -1,16 +1,13 @@
-//! The beam in n elements of either theory (`beam = quadratic | exact`) and its system: the
-//! one place a run chooses between [`BeamBodyN`] and [`ExactBeam`].
+//! The beam in n elements of either theory (`beam = quadratic | exact`): the one place the
+//! parameters choose between [`BeamBodyN`] and [`ExactBeam`], with what both give (the
+//! equilibrium and the modes at a held φ). A run steps either through its theory
+//! (`sim::theory`).
 
 use super::dynamics_n::BeamBodyN;
 use super::exact::ExactBeam;
 use super::formulation::{BeamModel, Formulation};
 use super::params::Params;
-use super::phi::PhiPiece;
-use super::systems::Kinematics;
-use super::systems_exact::ExactSystem;
-use super::systems_n::ElementsSystem;
-use crate::solver::{Layout, OdeSystem, RangeViolation, SecondOrder};
-use nalgebra::{DMatrix, DVector, Dyn};
+use nalgebra::DVector;
 
 /// The beam in n elements (or damped, or exact), with the body. A run holds one, boxed.
 #[allow(clippy::large_enum_variant)]
@@ -75,122 +72,8 @@ impl BeamN {
     /// beam, r_y(l) and α(l) of the exact one.
     pub fn tip_values(&self, q: &[f64]) -> (f64, f64) {
         match self {
-            BeamN::Quadratic(m) => {
-                let t = m.beam.tip();
-                (q[t], q[t + 1])
-            }
+            BeamN::Quadratic(m) => m.tip_values(q),
             BeamN::Exact(m) => m.tip_values(q),
-        }
-    }
-
-    /// Every node's deflection and slope (v_k, ϑ_k), k = 1..n, the tip last: the
-    /// coordinates of the quadratic beam; the centreline's y = r_y(s_k) and the section angle
-    /// α(s_k) of the exact one, at the arc length s_k = k·l/n.
-    pub fn nodal_shape(&self, q: &[f64]) -> Vec<f64> {
-        match self {
-            BeamN::Quadratic(_) => q.to_vec(),
-            BeamN::Exact(m) => {
-                let zero = vec![0.0; q.len()];
-                let (n, l) = (q.len() / 2, m.params().l);
-                (1..=n)
-                    .flat_map(|k| {
-                        let s = l * k as f64 / n as f64;
-                        [m.point(q, &zero, &zero, s).r[1], q[2 * k - 1]]
-                    })
-                    .collect()
-            }
-        }
-    }
-
-    /// The system on piece `phi`.
-    pub fn system(
-        &self,
-        phi: PhiPiece,
-        formulation: Formulation,
-        range_check: bool,
-    ) -> SystemN<'_> {
-        match self {
-            BeamN::Quadratic(model) => {
-                SystemN::Quadratic(ElementsSystem { model, phi, formulation, range_check })
-            }
-            BeamN::Exact(model) => SystemN::Exact(ExactSystem { model, phi, range_check }),
-        }
-    }
-}
-
-/// The system of a [`BeamN`].
-#[derive(Clone, Copy, Debug)]
-pub enum SystemN<'a> {
-    Quadratic(ElementsSystem<'a>),
-    Exact(ExactSystem<'a>),
-}
-
-impl SystemN<'_> {
-    /// The state with the tip's values ([`ElementsSystem::start`], [`ExactSystem::start`]).
-    pub fn start(
-        &self,
-        v1: f64,
-        theta1: f64,
-        dv1: f64,
-        dtheta1: f64,
-    ) -> Result<DVector<f64>, String> {
-        match self {
-            SystemN::Quadratic(s) => Ok(s.start(v1, theta1, dv1, dtheta1)),
-            SystemN::Exact(s) => s.start(v1, theta1, dv1, dtheta1),
-        }
-    }
-
-    /// The layout of the parts [`second_order`](OdeSystem::second_order) gives, `None` if it
-    /// gives none (the quadratic beam's DAE formulations: a dense Jacobian by differences).
-    pub fn layout(&self) -> Option<Layout> {
-        match self {
-            SystemN::Quadratic(s) => (!s.formulation.is_dae()).then_some(Layout::Banded),
-            SystemN::Exact(_) => Some(Layout::Dense),
-        }
-    }
-
-    /// The outputs' motion at (t, y).
-    pub fn kinematics(&self, t: f64, y: &DVector<f64>) -> Kinematics {
-        match self {
-            SystemN::Quadratic(s) => s.kinematics(t, y),
-            SystemN::Exact(s) => s.kinematics(t, y),
-        }
-    }
-}
-
-impl OdeSystem<Dyn> for SystemN<'_> {
-    fn rhs(&self, t: f64, y: &DVector<f64>) -> DVector<f64> {
-        match self {
-            SystemN::Quadratic(s) => s.rhs(t, y),
-            SystemN::Exact(s) => s.rhs(t, y),
-        }
-    }
-
-    fn jacobian(&self, t: f64, y: &DVector<f64>) -> Option<DMatrix<f64>> {
-        match self {
-            SystemN::Quadratic(s) => s.jacobian(t, y),
-            SystemN::Exact(s) => s.jacobian(t, y),
-        }
-    }
-
-    fn second_order(&self, t: f64, y: &DVector<f64>) -> Option<SecondOrder> {
-        match self {
-            SystemN::Quadratic(s) => s.second_order(t, y),
-            SystemN::Exact(s) => s.second_order(t, y),
-        }
-    }
-
-    fn project(&self, t: f64, y: &DVector<f64>) -> Option<DVector<f64>> {
-        match self {
-            SystemN::Quadratic(s) => s.project(t, y),
-            SystemN::Exact(s) => s.project(t, y),
-        }
-    }
-
-    fn check_range(&self, t: f64, y: &DVector<f64>) -> Result<(), RangeViolation> {
-        match self {
-            SystemN::Quadratic(s) => s.check_range(t, y),
-            SystemN::Exact(s) => s.check_range(t, y),
         }
     }
 }

@@ -165,6 +165,12 @@ impl BeamBodyN {
     }
 
     /// The number of coordinates, 2n.
+    /// The tip's deflection and slope (v1, ϑ1) at q: its coordinates.
+    pub fn tip_values(&self, q: &[f64]) -> (f64, f64) {
+        let t = self.beam.tip();
+        (q[t], q[t + 1])
+    }
+
     pub fn dofs(&self) -> usize {
         self.beam.dofs()
     }

@@ -24,7 +24,7 @@ mod systems_exact;
 mod systems_n;
 
 pub use balance::{Energy, EnergyBalance, Power};
-pub use beam_n::{BeamN, SystemN};
+pub use beam_n::BeamN;
 pub use dynamics::{BeamBody, Modes, Reactions};
 pub use dynamics_n::{BeamBodyN, MAX_ELEMENTS};
 pub use elements::Elements;

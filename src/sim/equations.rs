@@ -1,24 +1,110 @@
 //! `Equations`: a scene's equations of motion for an integrator that is not ours (FMI Model
 //! Exchange): the state-space form x′ = f(t, x) of the formulations that are ODEs in
 //! minimal coordinates, x = (q, q̇), with the outputs and the range of validity at any
-//! (t, x). The same model and systems [`Run`](super::Run) steps; only the integrator differs.
+//! (t, x). The same theory [`Run`](super::Run) steps ([`Theory`]); only the integrator differs.
 #![forbid(unsafe_code)]
 
-use super::systems::{build_model, two_dof};
+use super::theory::{self, vector, Build, Theory};
 use super::SimError;
-use crate::model::{
-    BeamBody, BeamN, Formulation, Kinematics, PaperLaw, Phi, PhiPiece, Poly, RangeCheck,
-};
+use crate::model::{BeamBody, Kinematics, PaperLaw, Phi, PhiPiece, Poly, RangeCheck};
 use crate::scene::{InitialState, PhiSource, Scene};
-use crate::solver::{OdeSystem, RangeViolation};
-use nalgebra::{DVector, Vector4};
+use crate::solver::{Bdf, OdeSystem, RangeViolation};
+use nalgebra::allocator::Allocator;
+use nalgebra::DefaultAllocator;
+use std::fmt::Debug;
+
+/// A theory's state-space form on slices, whatever the theory.
+trait StateSpace: Debug + Send + Sync {
+    fn clone_box(&self) -> Box<dyn StateSpace>;
+    fn states(&self) -> usize;
+    fn start(&self, piece: PhiPiece, init: &InitialState) -> Result<Vec<f64>, String>;
+    fn derivatives(&self, t: f64, piece: PhiPiece, x: &[f64], out: &mut [f64]);
+    fn kinematics(&self, t: f64, piece: PhiPiece, x: &[f64]) -> Kinematics;
+    fn check_range(
+        &self,
+        t: f64,
+        piece: PhiPiece,
+        x: &[f64],
+        check: bool,
+    ) -> Result<(), RangeViolation>;
+    fn nodal_shape(&self, x: &[f64]) -> Vec<f64>;
+    fn tip(&self, x: &[f64]) -> (f64, f64);
+    fn tip_limits(&self) -> bool;
+}
+
+impl Clone for Box<dyn StateSpace> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
+}
+
+impl<T: Theory> StateSpace for T
+where
+    DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
+{
+    fn clone_box(&self) -> Box<dyn StateSpace> {
+        Box::new(self.clone())
+    }
+
+    fn states(&self) -> usize {
+        Theory::states(self)
+    }
+
+    fn start(&self, piece: PhiPiece, init: &InitialState) -> Result<Vec<f64>, String> {
+        Ok(Theory::start(self, piece, init)?.as_slice().to_vec())
+    }
+
+    fn derivatives(&self, t: f64, piece: PhiPiece, x: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(self.system(piece, true).rhs(t, &vector(x)).as_slice());
+    }
+
+    fn kinematics(&self, t: f64, piece: PhiPiece, x: &[f64]) -> Kinematics {
+        T::kinematics(&self.system(piece, true), t, &vector(x))
+    }
+
+    fn check_range(
+        &self,
+        t: f64,
+        piece: PhiPiece,
+        x: &[f64],
+        check: bool,
+    ) -> Result<(), RangeViolation> {
+        self.system(piece, check).check_range(t, &vector(x))
+    }
+
+    fn nodal_shape(&self, x: &[f64]) -> Vec<f64> {
+        Theory::nodal_shape(self, x)
+    }
+
+    fn tip(&self, x: &[f64]) -> (f64, f64) {
+        Theory::tip(self, x)
+    }
+
+    fn tip_limits(&self) -> bool {
+        Theory::tip_limits(self)
+    }
+}
+
+/// Boxes the theory a scene names as a [`StateSpace`].
+struct Boxed;
+
+impl Build for Boxed {
+    type Out = Box<dyn StateSpace>;
+
+    fn build<T: Theory>(self, theory: T) -> Self::Out
+    where
+        DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
+        Bdf<T::D>: Send + Sync,
+    {
+        Box::new(theory)
+    }
+}
 
 /// A scene's equations in state-space form, for a host's integrator.
 #[derive(Clone, Debug)]
 pub struct Equations {
     model: BeamBody,
-    elements: Option<Box<BeamN>>,
-    formulation: Formulation,
+    theory: Box<dyn StateSpace>,
     /// The law that turns the body; `None` when a host sends φ, φ′ and φ″.
     law: Option<PaperLaw>,
     initial: InitialState,
@@ -39,11 +125,10 @@ impl Equations {
         }
         let law = scene.law;
         let phi0 = if scene.phi_source == PhiSource::Law { law.eval(t0).phi } else { phi0 };
-        let (model, elements) = build_model(scene, phi0)?;
+        let model = scene.check_model(phi0).map_err(SimError::Setting)?;
         Ok(Equations {
             model,
-            elements,
-            formulation: scene.formulation,
+            theory: theory::build(scene, model, Boxed)?,
             law: (scene.phi_source == PhiSource::Law).then_some(law),
             initial: scene.initial,
             range_check: scene.range_check,
@@ -52,11 +137,6 @@ impl Equations {
 
     pub fn model(&self) -> &BeamBody {
         &self.model
-    }
-
-    /// The beam in n elements, when the scene has one.
-    pub fn elements(&self) -> Option<&BeamN> {
-        self.elements.as_deref()
     }
 
     /// The law that turns the body, if φ is not a host's.
@@ -71,7 +151,7 @@ impl Equations {
 
     /// The number of states: 4 (the paper's model), 4n (n elements).
     pub fn state_count(&self) -> usize {
-        self.elements.as_ref().map_or(4, |e| 2 * e.dofs())
+        self.theory.states()
     }
 
     /// The piece of φ at `t`: the law's turn before its end (and at it, until the host has
@@ -86,42 +166,19 @@ impl Equations {
     }
 
     /// The start state at `t0` on `piece`: the scene's initial tip values (the beam in n
-    /// elements: its static shape with them, [`SystemN::start`](crate::model::SystemN)).
+    /// elements: its static shape with them, [`Theory::start`]).
     pub fn start(&self, piece: PhiPiece) -> Result<Vec<f64>, SimError> {
-        let i = self.initial;
-        match &self.elements {
-            None => Ok(vec![i.v1, i.theta1, i.dv1, i.dtheta1]),
-            Some(e) => {
-                let sys = e.system(piece, self.formulation, true);
-                let y = sys.start(i.v1, i.theta1, i.dv1, i.dtheta1).map_err(SimError::Setting)?;
-                Ok(y.as_slice().to_vec())
-            }
-        }
+        self.theory.start(piece, &self.initial).map_err(SimError::Setting)
     }
 
     /// f(t, x) on `piece` into `out`.
     pub fn derivatives(&self, t: f64, piece: PhiPiece, x: &[f64], out: &mut [f64]) {
-        match &self.elements {
-            None => {
-                let sys = two_dof(&self.model, piece, self.formulation);
-                out.copy_from_slice(sys.rhs(t, &Vector4::from_column_slice(x)).as_slice());
-            }
-            Some(e) => {
-                let sys = e.system(piece, self.formulation, true);
-                out.copy_from_slice(sys.rhs(t, &DVector::from_column_slice(x)).as_slice());
-            }
-        }
+        self.theory.derivatives(t, piece, x, out);
     }
 
     /// The motion at (t, x) on `piece`: the outputs follow from it.
     pub fn kinematics(&self, t: f64, piece: PhiPiece, x: &[f64]) -> Kinematics {
-        match &self.elements {
-            None => two_dof(&self.model, piece, self.formulation)
-                .kinematics(t, &Vector4::from_column_slice(x)),
-            Some(e) => e
-                .system(piece, self.formulation, true)
-                .kinematics(t, &DVector::from_column_slice(x)),
-        }
+        self.theory.kinematics(t, piece, x)
     }
 
     /// Whether x is inside the range of validity (`check`: with the limits of the model,
@@ -133,34 +190,23 @@ impl Equations {
         x: &[f64],
         check: bool,
     ) -> Result<(), RangeViolation> {
-        match &self.elements {
-            None => {
-                let sys = crate::model::TwoDofSystem {
-                    range_check: check,
-                    ..two_dof(&self.model, piece, self.formulation)
-                };
-                sys.check_range(t, &Vector4::from_column_slice(x))
-            }
-            Some(e) => e
-                .system(piece, self.formulation, check)
-                .check_range(t, &DVector::from_column_slice(x)),
-        }
+        self.theory.check_range(t, piece, x, check)
     }
 
-    /// Every node's (v_k, ϑ_k) at x, the tip last ([`BeamN::nodal_shape`]); (v1, ϑ1) for
+    /// Every node's (v_k, ϑ_k) at x, the tip last ([`Theory::nodal_shape`]); (v1, ϑ1) for
     /// the paper's model.
     pub fn nodal_shape(&self, x: &[f64]) -> Vec<f64> {
-        match &self.elements {
-            None => x[..2].to_vec(),
-            Some(e) => e.nodal_shape(&x[..e.dofs()]),
-        }
+        self.theory.nodal_shape(x)
     }
 
-    /// The tip's deflection and slope (v1, ϑ1) at x ([`BeamN::tip_values`]).
+    /// The tip's deflection and slope (v1, ϑ1) at x ([`Theory::tip`]).
     pub fn tip(&self, x: &[f64]) -> (f64, f64) {
-        match &self.elements {
-            None => (x[0], x[1]),
-            Some(e) => e.tip_values(&x[..e.dofs()]),
-        }
+        self.theory.tip(x)
+    }
+
+    /// Whether the tip's deflection and slope have limits ([`Theory::tip_limits`]): not the
+    /// exact beam's.
+    pub fn tip_limits(&self) -> bool {
+        self.theory.tip_limits()
     }
 }

@@ -17,7 +17,9 @@ pub use crate::scene::{InitialState, PhiSource, Scene};
 mod balance;
 mod equations;
 mod run;
+mod stepper;
 mod systems;
+pub mod theory;
 
 pub use balance::{Unstable, MAX_RELATIVE, RTOL_FACTOR};
 pub use equations::Equations;

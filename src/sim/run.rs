@@ -3,19 +3,17 @@
 //! times asked, and restarts the integrator where φ'' jumps.
 #![forbid(unsafe_code)]
 
-use super::balance::{self, EnergyMonitor};
-use super::systems::{build_model, dae, dae_start, two_dof, two_dof_start};
-use super::SimError;
+use super::balance::EnergyMonitor;
+use super::stepper::{Integration, Start, Stepping};
+use super::{theory, SimError};
 use crate::math;
 use crate::model::{
-    BeamBody, BeamN, DaeSystem, Energy, EnergyBalance, Formulation, HostSignal, Kinematics,
-    Outputs, PaperLaw, Phi, PhiPiece, Poly, Power, RangeCheck, Sample, SystemN, TwoDofSystem,
+    BeamBody, Energy, Formulation, HostSignal, Kinematics, Outputs, PaperLaw, Phi, PhiPiece, Poly,
+    RangeCheck, Sample,
 };
-use crate::scene::{InitialState, PhiSource, Scene};
-use crate::solver::{Bdf, BdfConfig, OdeSystem, RangeViolation, SolverError, Stats, StepOutcome};
+use crate::scene::{PhiSource, Scene};
+use crate::solver::{RangeViolation, SolverError, Stats};
 use crate::visit::StateVisitor;
-use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, Dim, Dyn, OVector, U4, U6};
 
 /// Where a run's φ comes from. The host's variant is the larger by 0.3 kB; a run holds
 /// one, so boxing would only add an indirection to every piece.
@@ -34,10 +32,9 @@ pub enum PhiInput {
 /// (FMU state save and restore).
 #[derive(Clone, Debug)]
 pub struct Run {
+    /// The paper's model of the same parameters: the body, which the outputs' reactions
+    /// follow from, whatever the theory.
     model: BeamBody,
-    /// The beam in n elements, damped, or exact: `None` for the paper's model, which
-    /// `model` integrates alone.
-    elements: Option<Box<BeamN>>,
     formulation: Formulation,
     input: PhiInput,
     /// The piece of φ in use: what the right-hand side evaluates.
@@ -65,85 +62,8 @@ pub struct Run {
     max_steps: u64,
     /// The energy check after every step (`energy_check`); `None` when it is off.
     energy: Option<EnergyMonitor>,
-    bdf: Integrator,
-}
-
-/// After an accepted step of `bdf`: the powers at the step's Gauss points, from the dense
-/// output and its derivative ([`balance::GAUSS_2`]) in the buffers `buf`, and the energy
-/// `monitor`'s check when due.
-fn monitor_step<D: Dim, S: OdeSystem<D> + EnergyBalance<D>>(
-    monitor: &mut Option<EnergyMonitor>,
-    sys: &S,
-    bdf: &Bdf<D>,
-    buf: &mut (OVector<f64, D>, OVector<f64, D>),
-) -> Result<(), SimError>
-where
-    DefaultAllocator: Allocator<D> + Allocator<D, D>,
-{
-    let Some(m) = monitor.as_mut().filter(|m| m.active()) else {
-        return Ok(());
-    };
-    let (t, h) = (bdf.t(), bdf.last_step().1);
-    let mut p = [Power::default(); 2];
-    for (p, c) in p.iter_mut().zip(balance::GAUSS_2) {
-        let ti = t - h + c * h;
-        let phi = sys.phi(ti);
-        if !sys.passive(&phi) {
-            bdf.interpolate_into(ti, &mut buf.0, &mut buf.1)?;
-            *p = sys.power(&phi, &buf.0, &buf.1);
-        }
-    }
-    if m.step(t, h, p) {
-        m.check(sys.energy(t, bdf.y())).map_err(SimError::Unstable)?;
-    }
-    Ok(())
-}
-
-/// [`Bdf::advance`], whose first step, with `probe`, is a [`Bdf::probe_step`]: the
-/// integrator restarts at its time if the history did not survive a change of f there. After
-/// every accepted step the energy `monitor` checks the balance.
-fn advance_probing<D: Dim, S: OdeSystem<D> + EnergyBalance<D>>(
-    bdf: &mut Bdf<D>,
-    sys: &S,
-    (tout, tstop): (f64, f64),
-    probe: bool,
-    single: bool,
-    monitor: &mut Option<EnergyMonitor>,
-) -> Result<(), SimError>
-where
-    DefaultAllocator: Allocator<D> + Allocator<D, D>,
-{
-    let mut buf = (bdf.y().clone(), bdf.y().clone());
-    let mut after = |bdf: &Bdf<D>| monitor_step(monitor, sys, bdf, &mut buf);
-    if probe && bdf.t() < tout {
-        if bdf.probe_step(sys, tstop)? == StepOutcome::Rejected {
-            bdf.reinit(bdf.t(), bdf.y().clone())?;
-        } else {
-            after(bdf)?;
-            if single {
-                return Ok(());
-            }
-        }
-    }
-    if single {
-        if bdf.t() < tout {
-            bdf.step(sys, tstop)?;
-            after(bdf)?;
-        }
-        return Ok(());
-    }
-    bdf.advance_with(sys, tout, tstop, after)
-}
-
-/// The paper's model: four states (reduced, linear) or six (dae, dae_stabilized), on the
-/// stack. The variants differ by 0.5 kB; a run holds one, so boxing would only add an
-/// indirection to every step. The beam in n elements: 4n or 4n + 2 states, on the heap.
-#[allow(clippy::large_enum_variant)]
-#[derive(Clone, Debug)]
-enum Integrator {
-    TwoDof(Bdf<U4>),
-    Dae(Bdf<U6>),
-    Elements(Bdf<Dyn>),
+    /// The scene's beam theory and its integrator.
+    bdf: Box<dyn Integration>,
 }
 
 impl Run {
@@ -151,21 +71,35 @@ impl Run {
     /// start one. With `phi_source = input`, `first` is the host's sample at t0 (the law
     /// ignores it). At most `max_steps` steps per call of [`step_to`](Self::step_to).
     pub fn start(scene: &Scene, t0: f64, first: Sample, max_steps: u64) -> Result<Run, SimError> {
-        let input = scene.phi_source == PhiSource::Input;
-        let phi0 = if input { first.phi } else { scene.law.eval(t0).phi };
-        let (model, elements) = build_model(scene, phi0)?;
-        let (formulation, init) = (scene.formulation, scene.initial);
-        let config = scene.solver_config(max_steps);
-        let mut run = if input {
-            let signal = HostSignal::new(scene.phi_interpolation, scene.phi_extrapolation);
-            Run::with_host(model, formulation, &config, t0, init, signal, first)?
+        let (input, law) = (scene.phi_source == PhiSource::Input, scene.law);
+        let phi0 = if input { first.phi } else { law.eval(t0).phi };
+        let model = scene.check_model(phi0).map_err(SimError::Setting)?;
+        let (input, piece) = if input {
+            let mut signal = HostSignal::new(scene.phi_interpolation, scene.phi_extrapolation);
+            let piece = PhiPiece::Poly(signal.start(Sample { t: t0, ..first }));
+            (PhiInput::Host(signal), piece)
         } else {
-            Run::with_law(model, formulation, &config, t0, init, scene.law)?
+            (PhiInput::Law(law), law.piece_from(t0))
         };
-        if let Some(elements) = elements {
-            run.use_elements(elements, &config, t0, init)?;
-        }
-        run.set_range_check(scene.range_check);
+        let config = scene.solver_config(max_steps);
+        let start = Start { piece, init: scene.initial, config: &config, t0 };
+        let bdf = theory::build(scene, model, start)??;
+        let mut run = Run {
+            model,
+            formulation: scene.formulation,
+            input,
+            piece,
+            sample: None,
+            extend: false,
+            range_set: scene.range_check,
+            range: scene.range_check,
+            warning: None,
+            untested_join: false,
+            single_step: false,
+            max_steps: config.max_steps,
+            energy: None,
+            bdf,
+        };
         if scene.energy_check != RangeCheck::Off {
             let rtol = (config.fixed_step.is_none()).then_some(config.rtol);
             let e = run.energy_now();
@@ -177,33 +111,12 @@ impl Run {
     /// The energy check's part of the last step, which ended in an error that did not stop the
     /// run (the range left with `range_check = warn`).
     fn monitor_last_step(&mut self) -> Result<(), SimError> {
-        let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
-        let monitor = &mut self.energy;
-        match &self.bdf {
-            Integrator::TwoDof(b) => {
-                let sys = two_dof(model, piece, formulation);
-                monitor_step(monitor, &sys, b, &mut (*b.y(), *b.y()))
-            }
-            Integrator::Dae(b) => {
-                let sys = dae(model, piece, formulation);
-                monitor_step(monitor, &sys, b, &mut (*b.y(), *b.y()))
-            }
-            Integrator::Elements(b) => {
-                let model = self.elements.as_deref().expect("a run of elements has its model");
-                let sys = model.system(piece, formulation, true);
-                monitor_step(monitor, &sys, b, &mut (b.y().clone(), b.y().clone()))
-            }
-        }
+        self.bdf.monitor_last_step(self.piece, &mut self.energy)
     }
 
     /// The energy at the solver's last step, with the piece in use.
     fn energy_now(&self) -> Energy {
-        let t = self.t();
-        match &self.bdf {
-            Integrator::TwoDof(b) => self.two_dof().energy(t, b.y()),
-            Integrator::Dae(b) => self.dae().energy(t, b.y()),
-            Integrator::Elements(b) => self.elements_system().energy(t, b.y()),
-        }
+        self.bdf.energy(self.piece)
     }
 
     /// Switches to `piece` at the current time, for the energy check too: where φ or φ′
@@ -226,93 +139,8 @@ impl Run {
         self.energy.as_ref().map(EnergyMonitor::worst)
     }
 
-    /// A run from `init` at `t0` driven by the law. The DAE's u2 and u̇2 start consistent.
-    pub fn with_law(
-        model: BeamBody,
-        formulation: Formulation,
-        options: &BdfConfig,
-        t0: f64,
-        init: InitialState,
-        law: PaperLaw,
-    ) -> Result<Self, SolverError> {
-        Self::new(model, formulation, options, t0, init, PhiInput::Law(law), law.piece_from(t0))
-    }
-
-    /// A run from `init` at `t0` driven by a host, whose sample at t0 is `first`.
-    pub fn with_host(
-        model: BeamBody,
-        formulation: Formulation,
-        options: &BdfConfig,
-        t0: f64,
-        init: InitialState,
-        mut signal: HostSignal,
-        first: Sample,
-    ) -> Result<Self, SolverError> {
-        let piece = PhiPiece::Poly(signal.start(Sample { t: t0, ..first }));
-        Self::new(model, formulation, options, t0, init, PhiInput::Host(signal), piece)
-    }
-
-    fn new(
-        model: BeamBody,
-        formulation: Formulation,
-        options: &BdfConfig,
-        t0: f64,
-        init: InitialState,
-        input: PhiInput,
-        piece: PhiPiece,
-    ) -> Result<Self, SolverError> {
-        let bdf = if formulation.is_dae() {
-            let y0 = dae_start(&dae(&model, piece, formulation), &init);
-            Integrator::Dae(Bdf::new(*options, t0, y0)?)
-        } else {
-            Integrator::TwoDof(Bdf::new(*options, t0, two_dof_start(&init))?)
-        };
-        Ok(Self {
-            model,
-            elements: None,
-            formulation,
-            input,
-            piece,
-            sample: None,
-            extend: false,
-            range_set: RangeCheck::Stop,
-            range: RangeCheck::Stop,
-            warning: None,
-            untested_join: false,
-            single_step: false,
-            max_steps: options.max_steps,
-            energy: None,
-            bdf,
-        })
-    }
-
-    /// Integrates the beam in n elements (or damped, or exact) instead of the paper's model,
-    /// from the same initial state (the tip's values, [`SystemN::start`]).
-    fn use_elements(
-        &mut self,
-        elements: Box<BeamN>,
-        options: &BdfConfig,
-        t0: f64,
-        init: InitialState,
-    ) -> Result<(), SimError> {
-        let sys = elements.system(self.piece, self.formulation, true);
-        let y0 =
-            sys.start(init.v1, init.theta1, init.dv1, init.dtheta1).map_err(SimError::Setting)?;
-        let mut bdf = Bdf::new(*options, t0, y0).map_err(SimError::Solver)?;
-        // The layout the saved state has too: a run restored from it sets the same.
-        bdf.set_second_order(sys.layout());
-        self.bdf = Integrator::Elements(bdf);
-        self.elements = Some(elements);
-        Ok(())
-    }
-
     pub fn model(&self) -> &BeamBody {
         &self.model
-    }
-
-    /// The beam in n elements, when the run integrates it.
-    pub fn elements(&self) -> Option<&BeamN> {
-        self.elements.as_deref()
     }
 
     pub fn formulation(&self) -> Formulation {
@@ -325,21 +153,13 @@ impl Run {
 
     /// The solver's time: that of its last step.
     pub fn t(&self) -> f64 {
-        match &self.bdf {
-            Integrator::TwoDof(b) => b.t(),
-            Integrator::Dae(b) => b.t(),
-            Integrator::Elements(b) => b.t(),
-        }
+        self.bdf.t()
     }
 
     /// The number of the integrator's states: 4 or 6 for the paper's model, 4n or 4n + 2
     /// for n elements.
     pub fn dimension(&self) -> usize {
-        match &self.bdf {
-            Integrator::TwoDof(_) => 4,
-            Integrator::Dae(_) => 6,
-            Integrator::Elements(b) => b.dimension(),
-        }
+        self.bdf.dimension()
     }
 
     /// The piece of φ in use.
@@ -351,19 +171,11 @@ impl Run {
     /// what is left of a budget shared by several calls (at least 1).
     pub fn set_max_steps(&mut self, max_steps: u64) {
         self.max_steps = max_steps.max(1);
-        match &mut self.bdf {
-            Integrator::TwoDof(b) => b.set_max_steps(max_steps),
-            Integrator::Dae(b) => b.set_max_steps(max_steps),
-            Integrator::Elements(b) => b.set_max_steps(max_steps),
-        }
+        self.bdf.set_max_steps(max_steps);
     }
 
     pub fn stats(&self) -> Stats {
-        match &self.bdf {
-            Integrator::TwoDof(b) => *b.stats(),
-            Integrator::Dae(b) => *b.stats(),
-            Integrator::Elements(b) => *b.stats(),
-        }
+        self.bdf.stats()
     }
 
     /// The host's φ (and the derivatives it sent) at the current time, for the next
@@ -522,24 +334,7 @@ impl Run {
 
     /// Drops the integrator's step history: it goes on at order 1 from its state.
     fn restart(&mut self) -> Result<(), SolverError> {
-        match &mut self.bdf {
-            Integrator::TwoDof(b) => b.reinit(b.t(), *b.y()),
-            Integrator::Dae(b) => b.reinit(b.t(), *b.y()),
-            Integrator::Elements(b) => b.reinit(b.t(), b.y().clone()),
-        }
-    }
-
-    fn two_dof(&self) -> TwoDofSystem<'_> {
-        two_dof(&self.model, self.piece, self.formulation)
-    }
-
-    fn dae(&self) -> DaeSystem<'_> {
-        dae(&self.model, self.piece, self.formulation)
-    }
-
-    fn elements_system(&self) -> SystemN<'_> {
-        let model = self.elements.as_deref().expect("a run of elements has its model");
-        model.system(self.piece, self.formulation, true)
+        self.bdf.restart()
     }
 
     /// Steps until t ≥ `tout`, never past `tstop`, through the law's breakpoint.
@@ -587,27 +382,12 @@ impl Run {
             if tout > self.t() && math::same_time(tout, self.t(), 0.0) {
                 return Ok(());
             }
-            let (model, piece, formulation) = (&self.model, self.piece, self.formulation);
-            let elements_model = self.elements.as_deref();
             let range_check = self.range != RangeCheck::Off;
             let probe = std::mem::take(&mut self.untested_join);
             let (single, before) = (self.single_step, self.t());
-            let (times, monitor) = ((tout, tstop), &mut self.energy);
-            let result = match &mut self.bdf {
-                Integrator::TwoDof(b) => {
-                    let sys = TwoDofSystem { range_check, ..two_dof(model, piece, formulation) };
-                    advance_probing(b, &sys, times, probe, single, monitor)
-                }
-                Integrator::Dae(b) => {
-                    let sys = DaeSystem { range_check, ..dae(model, piece, formulation) };
-                    advance_probing(b, &sys, times, probe, single, monitor)
-                }
-                Integrator::Elements(b) => {
-                    let model = elements_model.expect("a run of elements has its model");
-                    let sys = model.system(piece, formulation, range_check);
-                    advance_probing(b, &sys, times, probe, single, monitor)
-                }
-            };
+            let step = Stepping { probe, single };
+            let times = (tout, tstop);
+            let result = self.bdf.advance(self.piece, range_check, times, step, &mut self.energy);
             match result {
                 Err(SimError::Solver(e @ SolverError::OutOfRange { .. }))
                     if self.range == RangeCheck::Warn =>
@@ -633,11 +413,7 @@ impl Run {
     /// same step (after an FMU state was restored, say).
     pub fn range_violation(&self) -> Option<SolverError> {
         let t = self.t();
-        let checked = match &self.bdf {
-            Integrator::TwoDof(b) => self.two_dof().check_range(t, b.y()),
-            Integrator::Dae(b) => self.dae().check_range(t, b.y()),
-            Integrator::Elements(b) => self.elements_system().check_range(t, b.y()),
-        };
+        let checked = self.bdf.check_range(self.piece);
         checked.err().map(|RangeViolation { name, value, allowed }| SolverError::OutOfRange {
             t,
             name,
@@ -669,11 +445,7 @@ impl Run {
 
     /// Whether `t` is not behind the integrator's last step ([`Bdf::reaches_back_to`]).
     pub fn reaches_back_to(&self, t: f64) -> bool {
-        match &self.bdf {
-            Integrator::TwoDof(b) => b.reaches_back_to(t),
-            Integrator::Dae(b) => b.reaches_back_to(t),
-            Integrator::Elements(b) => b.reaches_back_to(t),
-        }
+        self.bdf.reaches_back_to(t)
     }
 
     /// The outputs at `t` inside the last step (dense output), with the current piece.
@@ -684,11 +456,7 @@ impl Run {
     /// The motion at `t` inside the last step (dense output): the outputs without the
     /// reactions and the energy, which follow from it.
     pub fn kinematics_at(&self, t: f64) -> Result<Kinematics, SolverError> {
-        Ok(match &self.bdf {
-            Integrator::TwoDof(b) => self.two_dof().kinematics(t, &b.interpolate(t)?),
-            Integrator::Dae(b) => self.dae().kinematics(t, &b.interpolate(t)?),
-            Integrator::Elements(b) => self.elements_system().kinematics(t, &b.interpolate(t)?),
-        })
+        self.bdf.kinematics_at(self.piece, t)
     }
 
     /// The state at `t` inside the last step (dense output) into `out`: (v1, ϑ1, v̇1, ϑ̇1),
@@ -698,25 +466,7 @@ impl Run {
     /// [`outputs_at`](Self::outputs_at), which also computes accelerations, reactions and
     /// energy; the benchmark records this, as the other solvers record their states.
     pub fn state_at(&self, t: f64, out: &mut [f64; 6]) -> Result<usize, SolverError> {
-        match &self.bdf {
-            Integrator::TwoDof(b) => {
-                out[..4].copy_from_slice(b.interpolate(t)?.as_slice());
-                Ok(4)
-            }
-            Integrator::Dae(b) => {
-                let mut y = b.interpolate(t)?;
-                if self.formulation == Formulation::DaeStabilized {
-                    y = self.dae().consistent(&y);
-                }
-                out.copy_from_slice(y.as_slice());
-                Ok(6)
-            }
-            Integrator::Elements(b) => {
-                let k = self.elements_system().kinematics(t, &b.interpolate(t)?);
-                out[..4].copy_from_slice(&[k.v1, k.theta1, k.dv1, k.dtheta1]);
-                Ok(4)
-            }
-        }
+        self.bdf.record_at(self.piece, t, out)
     }
 
     /// The beam's generalized coordinates q, their rates q̇ and accelerations q̈ at `t` inside
@@ -724,21 +474,7 @@ impl Run {
     /// derivatives. The paper's two coordinates (v1, ϑ1) in every formulation (a DAE's own
     /// state has u2 besides); every node's for n elements.
     pub fn motion_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
-        out.clear();
-        match &self.bdf {
-            Integrator::Elements(b) => {
-                let y = b.interpolate(t)?;
-                let dy = self.elements_system().rhs(t, &y);
-                let n = y.len() / 2;
-                out.extend_from_slice(y.as_slice());
-                out.extend_from_slice(&dy.as_slice()[n..]);
-            }
-            _ => {
-                let k = self.kinematics_at(t)?;
-                out.extend_from_slice(&[k.v1, k.theta1, k.dv1, k.dtheta1, k.ddv1, k.ddtheta1]);
-            }
-        }
-        Ok(())
+        self.bdf.motion_at(self.piece, t, out)
     }
 
     /// The coordinates q at `t` inside the last step (dense output) into `out`: every node's
@@ -746,15 +482,7 @@ impl Run {
     /// model.
     pub fn coordinates_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
         out.clear();
-        match &self.bdf {
-            Integrator::TwoDof(b) => out.extend_from_slice(&b.interpolate(t)?.as_slice()[..2]),
-            Integrator::Dae(b) => out.extend_from_slice(&b.interpolate(t)?.as_slice()[..2]),
-            Integrator::Elements(b) => {
-                let model = self.elements().expect("a run of elements has its model");
-                let y = b.interpolate(t)?;
-                out.extend(model.nodal_shape(&y.as_slice()[..model.dofs()]));
-            }
-        }
+        out.extend(self.bdf.nodal_shape_at(t)?);
         Ok(())
     }
 
@@ -802,11 +530,7 @@ impl Run {
         if let Some(m) = &mut self.energy {
             m.visit_state(v);
         }
-        match &mut self.bdf {
-            Integrator::TwoDof(b) => b.visit_state(v),
-            Integrator::Dae(b) => b.visit_state(v),
-            Integrator::Elements(b) => b.visit_state(v),
-        }
+        self.bdf.visit_state(v);
     }
 
     /// Checks a state written by a visitor: the piece (finite, and of a kind the input
@@ -832,11 +556,6 @@ impl Run {
         if let Some(m) = &self.energy {
             m.check_state()?;
         }
-        match &self.bdf {
-            Integrator::TwoDof(b) => b.check_state(),
-            Integrator::Dae(b) => b.check_state(),
-            Integrator::Elements(b) => b.check_state(),
-        }
-        .map_err(|e| e.to_string())
+        self.bdf.check_state().map_err(|e| e.to_string())
     }
 }

@@ -1,29 +1,12 @@
-//! The systems a scene makes, for our integrator (`Run`) and for a host's (`Equations`): the
-//! model a scene's parameters build, and each formulation's system on a piece of φ with its
-//! initial state.
+//! Each of the paper's formulations as a system on a piece of φ, with its initial state: for
+//! the paper's theory ([`theory::Paper`](super::theory::Paper)) and the benchmark's peers.
 #![forbid(unsafe_code)]
 
-use super::SimError;
 use crate::model::{
-    BeamBody, BeamBodyN, BeamN, DaeSystem, ElementsSystem, Formulation, PhiPiece, TwoDofSystem,
+    BeamBody, BeamBodyN, DaeSystem, ElementsSystem, Formulation, PhiPiece, TwoDofSystem,
 };
-use crate::scene::{InitialState, Scene};
+use crate::scene::InitialState;
 use nalgebra::SVector;
-
-/// The model a scene describes: the paper's two coordinates on the stack, or the beam in n
-/// elements (damped, exact) on the heap. The one construction [`Run::start`](super::Run) and
-/// [`Equations::new`] share.
-pub(super) fn build_model(
-    scene: &Scene,
-    phi0: f64,
-) -> Result<(BeamBody, Option<Box<BeamN>>), SimError> {
-    let model = scene.check_model(phi0).map_err(SimError::Setting)?;
-    let elements = (!scene.params.is_paper_model())
-        .then(|| BeamN::new(scene.params, scene.formulation).map(Box::new))
-        .transpose()
-        .map_err(SimError::Setting)?;
-    Ok((model, elements))
-}
 
 /// The system of the four-state formulations (reduced, linear) on piece `phi`: the one step
 /// from a formulation to its equations, for the driver and the benchmark's peers.
