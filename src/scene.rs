@@ -33,7 +33,7 @@ impl PhiSource {
 }
 
 /// The integrator's settings as the table has them: plain numbers, 0 for "the default".
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolverSettings {
     pub rtol: f64,
     /// 0: 1e-3·rtol.
@@ -102,7 +102,8 @@ pub struct Scene {
 }
 
 impl Default for Scene {
-    /// The defaults of [`SETTINGS`].
+    /// The defaults of [`SETTINGS`]: every field is a setting's, so the blank values below are
+    /// all overwritten.
     fn default() -> Self {
         let mut scene = Scene {
             params: Params::default(),
@@ -110,92 +111,121 @@ impl Default for Scene {
             initial: InitialState::default(),
             formulation: Formulation::Reduced,
             phi_source: PhiSource::Law,
-            phi_interpolation: Interpolation::Smooth,
-            phi_extrapolation: 3,
-            intermediate_step: 1e-3,
+            phi_interpolation: Interpolation::default(),
+            phi_extrapolation: 0,
+            intermediate_step: 0.0,
             input_derivatives: false,
-            dt_comm: 0.01,
-            solver: SolverSettings {
-                rtol: 1e-6,
-                atol: 0.0,
-                max_order: 5,
-                fixed_step: 0.0,
-                fixed_order: 0,
-                stability_guard: true,
-            },
-            range_check: RangeCheck::Stop,
-            energy_check: RangeCheck::Stop,
+            dt_comm: 0.0,
+            solver: SolverSettings::default(),
+            range_check: RangeCheck::default(),
+            energy_check: RangeCheck::default(),
             phi_filter_frequency: 0.0,
-            t_end: 10.0,
-            dt_out: 0.01,
-            max_rows: 1,
+            t_end: 0.0,
+            dt_out: 0.0,
+            max_rows: 0,
             columns: 0,
         };
-        for s in &SETTINGS {
+        for s in SETTINGS {
             scene.put(s.key, s.default);
         }
         scene
     }
 }
 
-/// Item `k` of `all`; the table's range check has made sure it exists.
-fn item<T: Copy>(all: &[T], k: usize) -> T {
-    all[k.min(all.len() - 1)]
+/// A scene's field that holds a setting: its value as the table has it, and back.
+trait Field {
+    fn value(&self, kind: Kind) -> Value;
+    /// Stores a value the table has checked.
+    fn store(&mut self, value: Value);
 }
 
-fn position<T: PartialEq>(all: &[T], x: &T) -> usize {
-    all.iter().position(|a| a == x).expect("every item is listed")
+impl Field for f64 {
+    fn value(&self, _: Kind) -> Value {
+        Value::Real(*self)
+    }
+    fn store(&mut self, value: Value) {
+        *self = if let Value::Real(x) = value { x } else { f64::NAN };
+    }
 }
 
-impl Scene {
-    /// The value of a setting.
-    pub fn get(&self, key: Key) -> Value {
-        use Value::{Bool, Choice, Integer, Real};
-        let (p, s) = (&self.params, &self.solver);
-        match key {
-            Key::L => Real(p.l),
-            Key::Ei => Real(p.ei),
-            Key::M => Real(p.m),
-            Key::M2 => Real(p.m2),
-            Key::JC => Real(p.j_c),
-            Key::R => Real(p.r),
-            Key::G => Real(p.g),
-            Key::NElements => Integer(p.n_elements as i64),
-            Key::DampingAlpha => Real(p.damping_alpha),
-            Key::DampingBeta => Real(p.damping_beta),
-            Key::DampingRatio => Real(p.damping_ratio),
-            Key::Beam => Choice(position(&BeamModel::ALL, &p.beam)),
-            Key::BeamGravity => Bool(p.beam_gravity),
-            Key::TRot => Real(self.law.t_rot),
-            Key::PhiEnd => Real(self.law.phi_end),
-            Key::Phi0 => Real(self.law.phi0),
-            Key::V10 => Real(self.initial.v1),
-            Key::Theta10 => Real(self.initial.theta1),
-            Key::Dv10 => Real(self.initial.dv1),
-            Key::Dtheta10 => Real(self.initial.dtheta1),
-            Key::Formulation => Choice(position(&Formulation::ALL, &self.formulation)),
-            Key::PhiSource => Choice(position(&PhiSource::ALL, &self.phi_source)),
-            Key::PhiInterpolation => Choice(position(&Interpolation::ALL, &self.phi_interpolation)),
-            Key::PhiExtrapolation => Integer(self.phi_extrapolation as i64),
-            Key::IntermediateStep => Real(self.intermediate_step),
-            Key::InputDerivatives => Bool(self.input_derivatives),
-            Key::DtComm => Real(self.dt_comm),
-            Key::Rtol => Real(s.rtol),
-            Key::Atol => Real(s.atol),
-            Key::MaxOrder => Integer(s.max_order as i64),
-            Key::FixedStep => Real(s.fixed_step),
-            Key::FixedOrder => Integer(s.fixed_order as i64),
-            Key::StabilityGuard => Bool(s.stability_guard),
-            Key::RangeCheck => Choice(position(&RangeCheck::ALL, &self.range_check)),
-            Key::EnergyCheck => Choice(position(&RangeCheck::ALL, &self.energy_check)),
-            Key::PhiFilterFrequency => Real(self.phi_filter_frequency),
-            Key::TEnd => Real(self.t_end),
-            Key::DtOut => Real(self.dt_out),
-            Key::MaxRows => Integer(self.max_rows as i64),
-            Key::Columns => Choice(self.columns),
+impl Field for bool {
+    fn value(&self, _: Kind) -> Value {
+        Value::Bool(*self)
+    }
+    fn store(&mut self, value: Value) {
+        *self = matches!(value, Value::Bool(true));
+    }
+}
+
+/// A count, or the index of an item where the setting is a choice (`columns`).
+impl Field for usize {
+    fn value(&self, kind: Kind) -> Value {
+        match kind {
+            Kind::Choice(_) => Value::Choice(*self),
+            _ => Value::Integer(*self as i64),
         }
     }
+    fn store(&mut self, value: Value) {
+        *self = match value {
+            Value::Integer(k) => k.max(0) as usize,
+            Value::Choice(k) => k,
+            _ => 0,
+        };
+    }
+}
 
+impl Field for u64 {
+    fn value(&self, _: Kind) -> Value {
+        Value::Integer(*self as i64)
+    }
+    fn store(&mut self, value: Value) {
+        *self = if let Value::Integer(k) = value { k.max(0) as u64 } else { 0 };
+    }
+}
+
+/// A choice: the item's index in `ALL`, the order of the enumeration.
+macro_rules! choice_field {
+    ($($t:ty),*) => {$(
+        impl Field for $t {
+            fn value(&self, _: Kind) -> Value {
+                Value::Choice(<$t>::ALL.iter().position(|a| a == self).expect("every item is listed"))
+            }
+            fn store(&mut self, value: Value) {
+                let k = if let Value::Choice(k) = value { k } else { 0 };
+                *self = <$t>::ALL[k.min(<$t>::ALL.len() - 1)];
+            }
+        }
+    )*};
+}
+
+choice_field!(Formulation, PhiSource, Interpolation, RangeCheck, BeamModel);
+
+/// The scene's `get` and `put` from the declaration of the settings: each key reads and writes
+/// its field.
+macro_rules! accessors {
+    ($($key:ident { field: $($field:ident).+, $($rest:tt)* })*) => {
+        impl Scene {
+            /// The value of a setting.
+            pub fn get(&self, key: Key) -> Value {
+                let kind = Setting::of(key).kind;
+                match key {
+                    $(Key::$key => self.$($field).+.value(kind),)*
+                }
+            }
+
+            /// Stores a checked value.
+            fn put(&mut self, key: Key, value: Value) {
+                match key {
+                    $(Key::$key => self.$($field).+.store(value),)*
+                }
+            }
+        }
+    };
+}
+
+crate::settings::for_each_setting!(accessors);
+
+impl Scene {
     /// Sets a setting after checking its value against the table; the error names the
     /// setting and what it allows, and leaves the scene unchanged.
     pub fn set(&mut self, key: Key, value: Value) -> Result<(), String> {
@@ -225,68 +255,6 @@ impl Scene {
             _ => Value::Real(value),
         };
         self.set(setting.key, value)
-    }
-
-    /// Stores a checked value.
-    fn put(&mut self, key: Key, value: Value) {
-        let real = |v: Value| match v {
-            Value::Real(x) => x,
-            _ => f64::NAN,
-        };
-        let int = |v: Value| match v {
-            Value::Integer(k) => k.max(0) as u64,
-            _ => 0,
-        };
-        let choice = |v: Value| match v {
-            Value::Choice(k) => k,
-            _ => 0,
-        };
-        let flag = |v: Value| matches!(v, Value::Bool(true));
-        let (p, s) = (&mut self.params, &mut self.solver);
-        match key {
-            Key::L => p.l = real(value),
-            Key::Ei => p.ei = real(value),
-            Key::M => p.m = real(value),
-            Key::M2 => p.m2 = real(value),
-            Key::JC => p.j_c = real(value),
-            Key::R => p.r = real(value),
-            Key::G => p.g = real(value),
-            Key::NElements => p.n_elements = int(value) as usize,
-            Key::DampingAlpha => p.damping_alpha = real(value),
-            Key::DampingBeta => p.damping_beta = real(value),
-            Key::DampingRatio => p.damping_ratio = real(value),
-            Key::Beam => p.beam = item(&BeamModel::ALL, choice(value)),
-            Key::BeamGravity => p.beam_gravity = flag(value),
-            Key::TRot => self.law.t_rot = real(value),
-            Key::PhiEnd => self.law.phi_end = real(value),
-            Key::Phi0 => self.law.phi0 = real(value),
-            Key::V10 => self.initial.v1 = real(value),
-            Key::Theta10 => self.initial.theta1 = real(value),
-            Key::Dv10 => self.initial.dv1 = real(value),
-            Key::Dtheta10 => self.initial.dtheta1 = real(value),
-            Key::Formulation => self.formulation = item(&Formulation::ALL, choice(value)),
-            Key::PhiSource => self.phi_source = item(&PhiSource::ALL, choice(value)),
-            Key::PhiInterpolation => {
-                self.phi_interpolation = item(&Interpolation::ALL, choice(value))
-            }
-            Key::PhiExtrapolation => self.phi_extrapolation = int(value) as usize,
-            Key::IntermediateStep => self.intermediate_step = real(value),
-            Key::InputDerivatives => self.input_derivatives = flag(value),
-            Key::DtComm => self.dt_comm = real(value),
-            Key::Rtol => s.rtol = real(value),
-            Key::Atol => s.atol = real(value),
-            Key::MaxOrder => s.max_order = int(value) as usize,
-            Key::FixedStep => s.fixed_step = real(value),
-            Key::FixedOrder => s.fixed_order = int(value) as usize,
-            Key::StabilityGuard => s.stability_guard = flag(value),
-            Key::RangeCheck => self.range_check = item(&RangeCheck::ALL, choice(value)),
-            Key::EnergyCheck => self.energy_check = item(&RangeCheck::ALL, choice(value)),
-            Key::PhiFilterFrequency => self.phi_filter_frequency = real(value),
-            Key::TEnd => self.t_end = real(value),
-            Key::DtOut => self.dt_out = real(value),
-            Key::MaxRows => self.max_rows = int(value),
-            Key::Columns => self.columns = choice(value),
-        }
     }
 
     /// The run's model in words, for a run's summary: the beam's theory and elements, the
@@ -460,7 +428,7 @@ mod tests {
     #[test]
     fn defaults_are_the_tables_and_the_models() {
         let s = Scene::default();
-        for setting in &SETTINGS {
+        for setting in SETTINGS {
             assert_eq!(s.get(setting.key), setting.default, "{}", setting.name);
         }
         assert_eq!(s.params, Params::default());
@@ -470,7 +438,7 @@ mod tests {
 
     #[test]
     fn every_setting_round_trips_and_a_refused_value_changes_nothing() {
-        for setting in &SETTINGS {
+        for setting in SETTINGS {
             let mut s = Scene::default();
             s.set(setting.key, setting.default).unwrap();
             assert_eq!(s, Scene::default(), "{}", setting.name);

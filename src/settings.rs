@@ -138,51 +138,6 @@ pub enum Value {
     Bool(bool),
 }
 
-/// The settings, by row of [`SETTINGS`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Key {
-    L,
-    Ei,
-    M,
-    M2,
-    JC,
-    R,
-    G,
-    NElements,
-    DampingAlpha,
-    DampingBeta,
-    DampingRatio,
-    Beam,
-    BeamGravity,
-    TRot,
-    PhiEnd,
-    Phi0,
-    V10,
-    Theta10,
-    Dv10,
-    Dtheta10,
-    Formulation,
-    PhiSource,
-    PhiInterpolation,
-    PhiExtrapolation,
-    IntermediateStep,
-    InputDerivatives,
-    DtComm,
-    Rtol,
-    Atol,
-    MaxOrder,
-    FixedStep,
-    FixedOrder,
-    StabilityGuard,
-    RangeCheck,
-    EnergyCheck,
-    PhiFilterFrequency,
-    TEnd,
-    DtOut,
-    MaxRows,
-    Columns,
-}
-
 /// The groups of settings, for the lists of the docs (`cargo xtask gen`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Group {
@@ -221,27 +176,6 @@ impl Group {
     }
 }
 
-impl Key {
-    /// The setting's group.
-    pub const fn group(self) -> Group {
-        use Key as K;
-        match self {
-            K::L | K::Ei | K::M | K::M2 | K::JC | K::R | K::G => Group::Model,
-            K::NElements | K::DampingAlpha | K::DampingBeta | K::DampingRatio => Group::Model,
-            K::Beam | K::BeamGravity => Group::Model,
-            K::TRot | K::PhiEnd | K::Phi0 => Group::Law,
-            K::V10 | K::Theta10 | K::Dv10 | K::Dtheta10 => Group::Initial,
-            K::PhiSource | K::PhiInterpolation | K::PhiExtrapolation => Group::Input,
-            K::IntermediateStep | K::InputDerivatives | K::DtComm => Group::Input,
-            K::PhiFilterFrequency => Group::Input,
-            K::Formulation | K::Rtol | K::Atol | K::MaxOrder | K::FixedStep => Group::Solver,
-            K::FixedOrder | K::StabilityGuard => Group::Solver,
-            K::RangeCheck | K::EnergyCheck => Group::Checks,
-            K::TEnd | K::DtOut | K::MaxRows | K::Columns => Group::Run,
-        }
-    }
-}
-
 /// Where a setting appears besides the scene (every setting is a scene key).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Appears {
@@ -251,6 +185,8 @@ pub struct Appears {
     pub study: bool,
     /// A flag of the CLI's `simulate`, `--flag VALUE`, besides `--set NAME=VALUE`.
     pub flag: Option<&'static str>,
+    /// A key of a study file's top level (`rtol = 1e-8`), besides `[set]`.
+    pub study_key: bool,
 }
 
 /// One row of the table.
@@ -394,357 +330,358 @@ const fn real(unit: &'static str) -> Kind {
     Kind::Real { unit: Some(unit) }
 }
 
-const NOWHERE: Appears = Appears { fmu: false, study: false, flag: None };
-const FMU: Appears = Appears { fmu: true, study: false, flag: None };
+const NOWHERE: Appears = Appears { fmu: false, study: false, flag: None, study_key: false };
+const FMU: Appears = Appears { fmu: true, ..NOWHERE };
 /// A number of the model, the law or the initial state: an FMU parameter a study can vary.
-const PHYSICAL: Appears = Appears { fmu: true, study: true, flag: None };
+const PHYSICAL: Appears = Appears { fmu: true, study: true, ..NOWHERE };
 
 const fn flag(fmu: bool, flag: &'static str) -> Appears {
-    Appears { fmu, study: false, flag: Some(flag) }
+    Appears { fmu, flag: Some(flag), ..NOWHERE }
 }
 
-const fn row(
-    key: Key,
-    name: &'static str,
-    kind: Kind,
-    range: Range,
-    default: Value,
-    description: &'static str,
-    appears: Appears,
-) -> Setting {
-    Setting { key, name, kind, range, default, description, appears, fmu_start: None }
+/// A flag of the CLI and a key of a study file's top level.
+const fn study_key(fmu: bool, flag: &'static str) -> Appears {
+    Appears { study_key: true, ..self::flag(fmu, flag) }
 }
 
-use Key as K;
+use crate::model::MAX_ELEMENTS;
+use crate::solver::RTOL_RANGE;
 use Range::{Finite, Integers, NonNegative, Positive};
 use Value::{Bool, Choice, Integer, Real};
 
-/// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`, checked by a test).
-/// Defaults are the paper's example (§4).
-pub const SETTINGS: [Setting; 40] = [
-    row(K::L, "l", real("m"), Positive, Real(2.5), "Beam length", PHYSICAL),
-    row(K::Ei, "EI", real("N.m2"), Positive, Real(1000.0), "Bending stiffness", PHYSICAL),
-    row(K::M, "m", real("kg/m"), NonNegative, Real(2.0), "Beam mass per unit length", PHYSICAL),
-    row(K::M2, "M2", real("kg"), Positive, Real(12.0), "Mass of the rigid body", PHYSICAL),
-    row(
-        K::JC,
-        "J_C",
-        real("kg.m2"),
-        NonNegative,
-        Real(1.0),
-        "Moment of inertia of the body about its centre of mass",
-        PHYSICAL,
-    ),
-    row(K::R, "r", real("m"), NonNegative, Real(0.5), "Hinge-to-centre-of-mass distance", PHYSICAL),
-    row(
-        K::G,
-        "g",
-        real("m/s2"),
-        Finite,
-        Real(10.0),
-        "Gravity along the undeformed beam axis (> 0 stretches the beam)",
-        PHYSICAL,
-    ),
-    row(
-        K::NElements,
-        "n_elements",
-        Kind::Integer,
-        Integers(1, crate::model::MAX_ELEMENTS as i64),
-        Integer(1),
-        "Cubic Hermite elements of the beam: 1 is the paper's model (2 coordinates), n has 2n",
-        Appears { fmu: true, study: true, flag: Some("--elements") },
-    ),
-    row(
-        K::DampingAlpha,
-        "damping_alpha",
-        real("1/s"),
-        NonNegative,
-        Real(0.0),
-        "Rayleigh damping of the beam: alpha times its mass matrix (0: none, as in the paper)",
-        PHYSICAL,
-    ),
-    row(
-        K::DampingBeta,
-        "damping_beta",
-        real("s"),
-        NonNegative,
-        Real(0.0),
-        "Rayleigh damping of the beam: beta times its stiffness matrix (0: none, as in the \
-         paper)",
-        PHYSICAL,
-    ),
-    row(
-        K::DampingRatio,
-        "damping_ratio",
-        Kind::Real { unit: None },
-        NonNegative,
-        Real(0.0),
-        "Rayleigh damping of the beam set by the damping ratio zeta of its own first two modes \
-         (the cantilever without the body); alpha and beta follow: give either this or them",
-        PHYSICAL,
-    ),
-    row(
-        K::Beam,
-        "beam",
-        Kind::Choice(&BEAM_TYPE),
-        Finite,
-        Choice(0),
-        "The beam's theory: quadratic (the paper's cut at second order) or exact (the \
-         inextensible elastica, valid at any rotation)",
-        flag(true, "--beam"),
-    ),
-    row(
-        K::BeamGravity,
-        "beam_gravity",
-        Kind::Bool,
-        Finite,
-        Bool(false),
-        "Gravity on the beam itself, g per unit length m along +x (the paper leaves it out)",
-        FMU,
-    ),
-    row(
-        K::TRot,
-        "t_rot",
-        real("s"),
-        Positive,
-        Real(0.85),
-        "Duration of the turn of the built-in law (phi_source = law)",
-        PHYSICAL,
-    ),
-    row(
-        K::PhiEnd,
-        "phi_end",
-        real("rad"),
-        Finite,
-        Real(std::f64::consts::PI),
-        "Angle turned by the built-in law (phi_source = law)",
-        PHYSICAL,
-    ),
-    row(
-        K::Phi0,
-        "phi0",
-        real("rad"),
-        Finite,
-        Real(0.0),
-        "Angle of the body at t = 0 under the built-in law, from which it turns by phi_end",
-        PHYSICAL,
-    ),
-    row(K::V10, "v1_0", real("m"), Finite, Real(0.0), "Tip deflection at the start", PHYSICAL),
-    row(
-        K::Theta10,
-        "theta1_0",
-        real("rad"),
-        Finite,
-        Real(0.0),
-        "Rotation of the tip section at the start",
-        PHYSICAL,
-    ),
-    row(K::Dv10, "dv1_0", real("m/s"), Finite, Real(0.0), "Rate of v1 at the start", PHYSICAL),
-    row(
-        K::Dtheta10,
-        "dtheta1_0",
-        real("rad/s"),
-        Finite,
-        Real(0.0),
-        "Rate of theta1 at the start",
-        PHYSICAL,
-    ),
-    row(
-        K::Formulation,
-        "formulation",
-        Kind::Choice(&FORMULATION_TYPE),
-        Finite,
-        Choice(0),
-        "Equations integrated: reduced (15), dae (20-21), dae_stabilized, linear (16)",
-        flag(true, "--formulation"),
-    ),
-    // The CLI runs the paper's law unless told otherwise; the FMU takes phi from its input,
-    // because some hosts (libcosim, Ecos) cannot set an enumeration, and every host must be
-    // able to drive phi. An FMU whose input is never set says so at its first step.
-    Setting {
-        fmu_start: Some(Choice(0)),
-        ..row(
-            K::PhiSource,
-            "phi_source",
-            Kind::Choice(&PHI_SOURCE_TYPE),
-            Finite,
-            Choice(1),
-            "Source of the hinge angle: the input phi (the FMU's default), or the paper's law \
-             (the CLI's default; the CLI's input is the law sampled as a host would, every \
-             dt_comm)",
-            FMU,
-        )
-    },
-    row(
-        K::PhiInterpolation,
-        "phi_interpolation",
-        Kind::Choice(&PHI_INTERPOLATION_TYPE),
-        Finite,
-        Choice(0),
-        "Interpolation of the input phi between communication points: smooth or taylor",
-        FMU,
-    ),
-    row(
-        K::PhiExtrapolation,
-        "phi_extrapolation",
-        Kind::Integer,
-        Integers(0, 3),
-        Integer(3),
-        "Degree of the polynomial through the last input values that gives phi over a step \
-         when the host sends no derivatives",
-        FMU,
-    ),
-    row(
-        K::IntermediateStep,
-        "intermediate_step",
-        real("s"),
-        NonNegative,
-        Real(1e-3),
-        "FMI 3.0 co-simulation, phi_source = input, with the host's intermediate-update \
-         callback: fmi3DoStep asks the host for phi every intermediate_step inside a \
-         communication step (the last part up to 1.25 times as long); 0 asks only at the \
-         communication points",
-        FMU,
-    ),
-    row(
-        K::InputDerivatives,
-        "input_derivatives",
-        Kind::Bool,
-        Finite,
-        Bool(false),
-        "CLI, phi_source = input: the emulated host also sends phi' and phi'' at every \
-         communication point (fmi2SetRealInputDerivatives)",
-        NOWHERE,
-    ),
-    row(
-        K::DtComm,
-        "dt_comm",
-        real("s"),
-        Positive,
-        Real(0.01),
-        "CLI, phi_source = input: the emulated host's communication step",
-        NOWHERE,
-    ),
-    row(
-        K::Rtol,
-        "rtol",
-        Kind::Real { unit: None },
-        Range::Closed(1e-14, 1.0),
-        Real(1e-6),
-        "Relative tolerance of the integrator (the FMU takes fmi2SetupExperiment's)",
-        flag(false, "--rtol"),
-    ),
-    row(
-        K::Atol,
-        "atol",
-        Kind::Real { unit: None },
-        NonNegative,
-        Real(0.0),
-        "Absolute tolerance of the integrator for every state, in its SI unit; 0 selects \
-         1e-3 times the relative tolerance",
-        flag(true, "--atol"),
-    ),
-    row(
-        K::MaxOrder,
-        "max_order",
-        Kind::Integer,
-        Integers(1, 5),
-        Integer(5),
-        "Highest order of the adaptive BDF",
-        flag(true, "--max-order"),
-    ),
-    row(
-        K::FixedStep,
-        "fixed_step",
-        real("s"),
-        NonNegative,
-        Real(0.0),
-        "Constant internal step of the paper's fixed-step BDF; 0 selects the adaptive BDF",
-        flag(true, "--fixed-step"),
-    ),
-    row(
-        K::FixedOrder,
-        "fixed_order",
-        Kind::Integer,
-        Integers(0, 5),
-        Integer(0),
-        "Order of the fixed-step BDF, needs fixed_step > 0; 0 selects order 2",
-        flag(true, "--fixed-order"),
-    ),
-    row(
-        K::StabilityGuard,
-        "stability_guard",
-        Kind::Bool,
-        Finite,
-        Bool(true),
-        "Cap the BDF order where an undamped mode would be amplified by BDF3-5",
-        flag(true, "--stability-guard"),
-    ),
-    row(
-        K::RangeCheck,
-        "range_check",
-        Kind::Choice(&RANGE_CHECK_TYPE),
-        Finite,
-        Choice(0),
-        "Outside the range of validity (|v1| <= l, |theta1| <= pi/2, ...; the exact beam: a \
-         centreline that crosses itself): stop, warn or off",
-        FMU,
-    ),
-    row(
-        K::EnergyCheck,
-        "energy_check",
-        Kind::Choice(&ENERGY_CHECK_TYPE),
-        Finite,
-        Choice(0),
-        "When the energy balance breaks (the energy's change against the work of the drive \
-         and the damping, after every step, within 100 rtol of the energy handled, at most \
-         10 %): the run is numerically unstable; stop, warn or off",
-        FMU,
-    ),
-    row(
-        K::PhiFilterFrequency,
-        "phi_filter_frequency",
-        real("Hz"),
-        Positive,
-        Real(PHI_FILTER_FREQUENCY),
-        "Model Exchange with phi_source = input, when the host sets phi but not dphi and \
-         ddphi: the cut-off frequency of the second-order filter whose states give phi, phi' \
-         and phi'' from phi (Modelica's Rotational.Sources.Position with exact = false); a \
-         host that sets dphi and ddphi gets them as it sends them",
-        FMU,
-    ),
-    row(K::TEnd, "t_end", real("s"), Positive, Real(10.0), "End time of a CLI run", NOWHERE),
-    row(
-        K::DtOut,
-        "dt_out",
-        real("s"),
-        Positive,
-        Real(0.01),
-        "Output step of a CLI run: rows at t = k*dt_out and at t_end",
-        NOWHERE,
-    ),
-    row(
-        K::MaxRows,
-        "max_rows",
-        Kind::Integer,
-        Integers(1, 1 << 53),
-        Integer(MAX_ROWS_DEFAULT),
-        "Most output rows a CLI run or a study case may have (t_end/dt_out + 1); a run that \
-         would have more is refused before it starts",
-        flag(false, "--max-rows"),
-    ),
-    row(
-        K::Columns,
-        "columns",
-        Kind::Choice(&COLUMNS_TYPE),
-        Finite,
-        Choice(0),
-        "Columns of a CLI run's CSV: paper (the default), beam (and the loads at the root and \
-         the deflection at the quarter points; the FMU has them as outputs), or shape (and \
-         the nodes' deflections and slopes, for pictures)",
-        flag(false, "--columns"),
-    ),
-];
+/// The one declaration of every setting, in the order of [`Key`]: its key, then the
+/// [`Scene`](crate::scene::Scene) field that holds it, its name, kind, range (of a number),
+/// default, group, where it appears, its FMU start value where that differs from the default,
+/// and its description. Each use passes a macro that takes the list (the X-macro pattern): [`Key`],
+/// [`SETTINGS`] and [`Key::group`] here, the scene's `get` and `put` in `scene.rs`. Defaults
+/// are the paper's example (§4).
+macro_rules! for_each_setting {
+    ($use:ident) => {
+        $use! {
+        L {
+            field: params.l,
+            name: "l", kind: real("m"), range: Positive, default: Real(2.5), group: Model,
+            appears: PHYSICAL,
+            description: "Beam length",
+        }
+        Ei {
+            field: params.ei,
+            name: "EI", kind: real("N.m2"), range: Positive, default: Real(1000.0), group: Model,
+            appears: PHYSICAL,
+            description: "Bending stiffness",
+        }
+        M {
+            field: params.m,
+            name: "m", kind: real("kg/m"), range: NonNegative, default: Real(2.0), group: Model,
+            appears: PHYSICAL,
+            description: "Beam mass per unit length",
+        }
+        M2 {
+            field: params.m2,
+            name: "M2", kind: real("kg"), range: Positive, default: Real(12.0), group: Model,
+            appears: PHYSICAL,
+            description: "Mass of the rigid body",
+        }
+        JC {
+            field: params.j_c,
+            name: "J_C", kind: real("kg.m2"), range: NonNegative, default: Real(1.0), group: Model,
+            appears: PHYSICAL,
+            description: "Moment of inertia of the body about its centre of mass",
+        }
+        R {
+            field: params.r,
+            name: "r", kind: real("m"), range: NonNegative, default: Real(0.5), group: Model,
+            appears: PHYSICAL,
+            description: "Hinge-to-centre-of-mass distance",
+        }
+        G {
+            field: params.g,
+            name: "g", kind: real("m/s2"), range: Finite, default: Real(10.0), group: Model,
+            appears: PHYSICAL,
+            description: "Gravity along the undeformed beam axis (> 0 stretches the beam)",
+        }
+        NElements {
+            field: params.n_elements,
+            name: "n_elements", kind: Kind::Integer, range: Integers(1, MAX_ELEMENTS as i64),
+            default: Integer(1), group: Model,
+            appears: Appears { flag: Some("--elements"), ..PHYSICAL },
+            description: "Cubic Hermite elements of the beam: 1 is the paper's model (2 \
+coordinates), n has 2n",
+        }
+        DampingAlpha {
+            field: params.damping_alpha,
+            name: "damping_alpha", kind: real("1/s"), range: NonNegative, default: Real(0.0),
+            group: Model, appears: PHYSICAL,
+            description: "Rayleigh damping of the beam: alpha times its mass matrix (0: none, as \
+in the paper)",
+        }
+        DampingBeta {
+            field: params.damping_beta,
+            name: "damping_beta", kind: real("s"), range: NonNegative, default: Real(0.0),
+            group: Model, appears: PHYSICAL,
+            description: "Rayleigh damping of the beam: beta times its stiffness matrix (0: none, \
+as in the paper)",
+        }
+        DampingRatio {
+            field: params.damping_ratio,
+            name: "damping_ratio", kind: Kind::Real { unit: None }, range: NonNegative,
+            default: Real(0.0), group: Model, appears: PHYSICAL,
+            description: "Rayleigh damping of the beam set by the damping ratio zeta of its own \
+first two modes (the cantilever without the body); alpha and beta follow: give \
+either this or them",
+        }
+        Beam {
+            field: params.beam,
+            name: "beam", kind: Kind::Choice(&BEAM_TYPE), range: Finite, default: Choice(0),
+            group: Model, appears: flag(true, "--beam"),
+            description: "The beam's theory: quadratic (the paper's cut at second order) or exact \
+(the inextensible elastica, valid at any rotation)",
+        }
+        BeamGravity {
+            field: params.beam_gravity,
+            name: "beam_gravity", kind: Kind::Bool, range: Finite, default: Bool(false),
+            group: Model, appears: FMU,
+            description: "Gravity on the beam itself, g per unit length m along +x (the paper \
+leaves it out)",
+        }
+        TRot {
+            field: law.t_rot,
+            name: "t_rot", kind: real("s"), range: Positive, default: Real(0.85), group: Law,
+            appears: PHYSICAL,
+            description: "Duration of the turn of the built-in law (phi_source = law)",
+        }
+        PhiEnd {
+            field: law.phi_end,
+            name: "phi_end", kind: real("rad"), range: Finite, default: Real(std::f64::consts::PI),
+            group: Law, appears: PHYSICAL,
+            description: "Angle turned by the built-in law (phi_source = law)",
+        }
+        Phi0 {
+            field: law.phi0,
+            name: "phi0", kind: real("rad"), range: Finite, default: Real(0.0), group: Law,
+            appears: PHYSICAL,
+            description: "Angle of the body at t = 0 under the built-in law, from which it turns \
+by phi_end",
+        }
+        V10 {
+            field: initial.v1,
+            name: "v1_0", kind: real("m"), range: Finite, default: Real(0.0), group: Initial,
+            appears: PHYSICAL,
+            description: "Tip deflection at the start",
+        }
+        Theta10 {
+            field: initial.theta1,
+            name: "theta1_0", kind: real("rad"), range: Finite, default: Real(0.0), group: Initial,
+            appears: PHYSICAL,
+            description: "Rotation of the tip section at the start",
+        }
+        Dv10 {
+            field: initial.dv1,
+            name: "dv1_0", kind: real("m/s"), range: Finite, default: Real(0.0), group: Initial,
+            appears: PHYSICAL,
+            description: "Rate of v1 at the start",
+        }
+        Dtheta10 {
+            field: initial.dtheta1,
+            name: "dtheta1_0", kind: real("rad/s"), range: Finite, default: Real(0.0),
+            group: Initial, appears: PHYSICAL,
+            description: "Rate of theta1 at the start",
+        }
+        Formulation {
+            field: formulation,
+            name: "formulation", kind: Kind::Choice(&FORMULATION_TYPE), range: Finite,
+            default: Choice(0), group: Solver, appears: study_key(true, "--formulation"),
+            description: "Equations integrated: reduced (15), dae (20-21), dae_stabilized, linear \
+(16)",
+        }
+        PhiSource {
+            field: phi_source,
+            name: "phi_source", kind: Kind::Choice(&PHI_SOURCE_TYPE), range: Finite,
+            default: Choice(1), group: Input, appears: FMU, fmu_start: Choice(0),
+            description: "Source of the hinge angle: the input phi (the FMU's default), or the \
+paper's law (the CLI's default; the CLI's input is the law sampled as a host \
+would, every dt_comm)",
+        }
+        PhiInterpolation {
+            field: phi_interpolation,
+            name: "phi_interpolation", kind: Kind::Choice(&PHI_INTERPOLATION_TYPE), range: Finite,
+            default: Choice(0), group: Input, appears: FMU,
+            description: "Interpolation of the input phi between communication points: smooth or \
+taylor",
+        }
+        PhiExtrapolation {
+            field: phi_extrapolation,
+            name: "phi_extrapolation", kind: Kind::Integer, range: Integers(0, 3),
+            default: Integer(3), group: Input, appears: FMU,
+            description: "Degree of the polynomial through the last input values that gives phi \
+over a step when the host sends no derivatives",
+        }
+        IntermediateStep {
+            field: intermediate_step,
+            name: "intermediate_step", kind: real("s"), range: NonNegative, default: Real(1e-3),
+            group: Input, appears: FMU,
+            description: "FMI 3.0 co-simulation, phi_source = input, with the host's \
+intermediate-update callback: fmi3DoStep asks the host for phi every \
+intermediate_step inside a communication step (the last part up to 1.25 times as \
+long); 0 asks only at the communication points",
+        }
+        InputDerivatives {
+            field: input_derivatives,
+            name: "input_derivatives", kind: Kind::Bool, range: Finite, default: Bool(false),
+            group: Input, appears: NOWHERE,
+            description: "CLI, phi_source = input: the emulated host also sends phi' and phi'' at \
+every communication point (fmi2SetRealInputDerivatives)",
+        }
+        DtComm {
+            field: dt_comm,
+            name: "dt_comm", kind: real("s"), range: Positive, default: Real(0.01), group: Input,
+            appears: NOWHERE,
+            description: "CLI, phi_source = input: the emulated host's communication step",
+        }
+        Rtol {
+            field: solver.rtol,
+            name: "rtol", kind: Kind::Real { unit: None }, range: RTOL_RANGE, default: Real(1e-6),
+            group: Solver, appears: study_key(false, "--rtol"),
+            description: "Relative tolerance of the integrator (the FMU takes \
+fmi2SetupExperiment's)",
+        }
+        Atol {
+            field: solver.atol,
+            name: "atol", kind: Kind::Real { unit: None }, range: NonNegative, default: Real(0.0),
+            group: Solver, appears: study_key(true, "--atol"),
+            description: "Absolute tolerance of the integrator for every state, in its SI unit; 0 \
+selects 1e-3 times the relative tolerance",
+        }
+        MaxOrder {
+            field: solver.max_order,
+            name: "max_order", kind: Kind::Integer, range: Integers(1, 5), default: Integer(5),
+            group: Solver, appears: flag(true, "--max-order"),
+            description: "Highest order of the adaptive BDF",
+        }
+        FixedStep {
+            field: solver.fixed_step,
+            name: "fixed_step", kind: real("s"), range: NonNegative, default: Real(0.0),
+            group: Solver, appears: flag(true, "--fixed-step"),
+            description: "Constant internal step of the paper's fixed-step BDF; 0 selects the \
+adaptive BDF",
+        }
+        FixedOrder {
+            field: solver.fixed_order,
+            name: "fixed_order", kind: Kind::Integer, range: Integers(0, 5), default: Integer(0),
+            group: Solver, appears: flag(true, "--fixed-order"),
+            description: "Order of the fixed-step BDF, needs fixed_step > 0; 0 selects order 2",
+        }
+        StabilityGuard {
+            field: solver.stability_guard,
+            name: "stability_guard", kind: Kind::Bool, range: Finite, default: Bool(true),
+            group: Solver, appears: flag(true, "--stability-guard"),
+            description: "Cap the BDF order where an undamped mode would be amplified by BDF3-5",
+        }
+        RangeCheck {
+            field: range_check,
+            name: "range_check", kind: Kind::Choice(&RANGE_CHECK_TYPE), range: Finite,
+            default: Choice(0), group: Checks, appears: FMU,
+            description: "Outside the range of validity (|v1| <= l, |theta1| <= pi/2, ...; the \
+exact beam: a centreline that crosses itself): stop, warn or off",
+        }
+        EnergyCheck {
+            field: energy_check,
+            name: "energy_check", kind: Kind::Choice(&ENERGY_CHECK_TYPE), range: Finite,
+            default: Choice(0), group: Checks, appears: FMU,
+            description: "When the energy balance breaks (the energy's change against the work of \
+the drive and the damping, after every step, within 100 rtol of the energy \
+handled, at most 10 %): the run is numerically unstable; stop, warn or off",
+        }
+        PhiFilterFrequency {
+            field: phi_filter_frequency,
+            name: "phi_filter_frequency", kind: real("Hz"), range: Positive,
+            default: Real(PHI_FILTER_FREQUENCY), group: Input, appears: FMU,
+            description: "Model Exchange with phi_source = input, when the host sets phi but not \
+dphi and ddphi: the cut-off frequency of the second-order filter whose states \
+give phi, phi' and phi'' from phi (Modelica's Rotational.Sources.Position with \
+exact = false); a host that sets dphi and ddphi gets them as it sends them",
+        }
+        TEnd {
+            field: t_end,
+            name: "t_end", kind: real("s"), range: Positive, default: Real(10.0), group: Run,
+            appears: NOWHERE,
+            description: "End time of a CLI run",
+        }
+        DtOut {
+            field: dt_out,
+            name: "dt_out", kind: real("s"), range: Positive, default: Real(0.01), group: Run,
+            appears: NOWHERE,
+            description: "Output step of a CLI run: rows at t = k*dt_out and at t_end",
+        }
+        MaxRows {
+            field: max_rows,
+            name: "max_rows", kind: Kind::Integer, range: Integers(1, 1 << 53),
+            default: Integer(MAX_ROWS_DEFAULT), group: Run, appears: flag(false, "--max-rows"),
+            description: "Most output rows a CLI run or a study case may have (t_end/dt_out + 1); \
+a run that would have more is refused before it starts",
+        }
+        Columns {
+            field: columns,
+            name: "columns", kind: Kind::Choice(&COLUMNS_TYPE), range: Finite, default: Choice(0),
+            group: Run, appears: flag(false, "--columns"),
+            description: "Columns of a CLI run's CSV: paper (the default), beam (and the loads at \
+the root and the deflection at the quarter points; the FMU has them as outputs), \
+or shape (and the nodes' deflections and slopes, for pictures)",
+        }
+        }
+    };
+}
+pub(crate) use for_each_setting;
+
+/// `Some` of an optional macro argument.
+macro_rules! optional {
+    () => {
+        None
+    };
+    ($e:expr) => {
+        Some($e)
+    };
+}
+
+/// [`Key`], [`Key::group`] and [`SETTINGS`] from the declaration.
+macro_rules! declare {
+    ($($key:ident {
+        field: $($field:ident).+,
+        name: $name:literal, kind: $kind:expr, range: $range:expr, default: $default:expr,
+        group: $group:ident, appears: $appears:expr,
+        $(fmu_start: $fmu_start:expr,)?
+        description: $description:literal $(,)?
+    })*) => {
+        /// The settings, by row of [`SETTINGS`].
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Key {
+            $($key,)*
+        }
+
+        impl Key {
+            /// The setting's group.
+            pub const fn group(self) -> Group {
+                match self {
+                    $(Key::$key => Group::$group,)*
+                }
+            }
+        }
+
+        /// Every setting, in the order of [`Key`] (`SETTINGS[k].key == k`).
+        pub const SETTINGS: &[Setting] = &[$(Setting {
+            key: Key::$key,
+            name: $name,
+            kind: $kind,
+            range: $range,
+            default: $default,
+            description: $description,
+            appears: $appears,
+            fmu_start: optional!($($fmu_start)?),
+        },)*];
+    };
+}
+
+for_each_setting!(declare);
 
 /// The default of `phi_filter_frequency` [Hz] (docs/fmu.md, "Model Exchange with φ alone").
 pub const PHI_FILTER_FREQUENCY: f64 = 10.0;

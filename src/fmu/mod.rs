@@ -375,7 +375,7 @@ impl fmi::Model for BeamBodyFmu {
     }
 
     fn check_tolerance(tol: f64) -> Result<(), String> {
-        check_rtol(tol).map_err(str::to_string)
+        check_rtol(tol).map_err(|range| range.to_string())
     }
 
     fn get(&mut self, vr: u32, setup: &Setup) -> Result<Value, String> {

@@ -1,4 +1,5 @@
-use super::error::SolverError;
+use super::error::{Allowed, SolverError};
+use crate::range::Range;
 
 /// The paper's mode: constant step `h` and a fixed order (reached by raising the order one
 /// step at a time from 1, at the same step size).
@@ -14,7 +15,7 @@ pub struct FixedStep {
 /// the FMU's parameters and the benchmark fill it in).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BdfConfig {
-    /// Relative tolerance, in [1e-14, 1] ([`check_rtol`]). Default 1e-6.
+    /// Relative tolerance, in [`RTOL_RANGE`] ([`check_rtol`]). Default 1e-6.
     pub rtol: f64,
     /// Absolute tolerance for every state, > 0 (a zero would divide by |y| = 0). Default
     /// `None`: 1e-3·rtol.
@@ -53,13 +54,19 @@ impl Default for BdfConfig {
     }
 }
 
-/// The allowed relative tolerances, [1e-14, 1]: the one check of the range, for the solver,
-/// the CLI and the FMU. The error is the allowed range, for "… must be {error}".
-pub fn check_rtol(rtol: f64) -> Result<(), &'static str> {
-    if rtol.is_finite() && (1e-14..=1.0).contains(&rtol) {
+/// The allowed relative tolerances: written once, here; the settings table's `rtol` takes it.
+pub const RTOL_RANGE: Range = Range::Closed(1e-14, 1.0);
+
+/// The allowed orders of the BDF, adaptive (`max_order`) or fixed (`fixed_order`).
+pub const ORDER_RANGE: Range = Range::Integers(1, 5);
+
+/// The one check of the relative tolerance, for the solver, the CLI and the FMU. The error is
+/// the allowed range, for "… must be {error}".
+pub fn check_rtol(rtol: f64) -> Result<(), Range> {
+    if RTOL_RANGE.contains(rtol) {
         Ok(())
     } else {
-        Err("in [1e-14, 1]")
+        Err(RTOL_RANGE)
     }
 }
 
@@ -77,17 +84,20 @@ impl BdfConfig {
     /// Checks every field against its allowed range.
     pub fn validate(&self) -> Result<(), SolverError> {
         let bad = |field: &'static str, value: f64, allowed: &'static str| {
-            Err(SolverError::InvalidConfig { field, value, allowed })
+            Err(SolverError::InvalidConfig { field, value, allowed: Allowed::Words(allowed) })
         };
-        if let Err(allowed) = check_rtol(self.rtol) {
-            return bad("rtol", self.rtol, allowed);
+        let outside = |field: &'static str, value: f64, range: Range| {
+            Err(SolverError::InvalidConfig { field, value, allowed: Allowed::Range(range) })
+        };
+        if let Err(range) = check_rtol(self.rtol) {
+            return outside("rtol", self.rtol, range);
         }
         let atol = self.atol();
         if !(atol.is_finite() && atol > 0.0) {
             return bad("atol", atol, "positive and finite");
         }
-        if !(1..=5).contains(&self.max_order) {
-            return bad("max_order", self.max_order as f64, "an integer in 1..=5");
+        if !ORDER_RANGE.contains(self.max_order as f64) {
+            return outside("max_order", self.max_order as f64, ORDER_RANGE);
         }
         if let Some(h) = self.h_init {
             if !(h.is_finite() && h > 0.0) {
@@ -107,8 +117,8 @@ impl BdfConfig {
             if !(f.h.is_finite() && f.h > 0.0) {
                 return bad("fixed_step.h", f.h, "positive and finite");
             }
-            if !(1..=5).contains(&f.order) {
-                return bad("fixed_step.order", f.order as f64, "an integer in 1..=5");
+            if !ORDER_RANGE.contains(f.order as f64) {
+                return outside("fixed_step.order", f.order as f64, ORDER_RANGE);
             }
         }
         Ok(())

@@ -1,11 +1,28 @@
+use crate::range::Range;
 use std::fmt;
+
+/// What a configuration field allows: a range, or words for what a range cannot say.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Allowed {
+    Range(Range),
+    Words(&'static str),
+}
+
+impl fmt::Display for Allowed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Allowed::Range(r) => r.fmt(f),
+            Allowed::Words(w) => f.write_str(w),
+        }
+    }
+}
 
 /// Why the integrator stopped or refused its input. Every failure of a step names the time at
 /// which it happened.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolverError {
     /// A configuration field is outside its allowed range.
-    InvalidConfig { field: &'static str, value: f64, allowed: &'static str },
+    InvalidConfig { field: &'static str, value: f64, allowed: Allowed },
     /// The initial state or a reinitialisation state has a NaN or infinite component.
     NonFiniteState { t: f64 },
     /// f returned NaN or ±∞ and no smaller step helped.

@@ -53,8 +53,8 @@ mod system;
 
 pub use band::GenBand;
 pub use bdf::{Bdf, StepOutcome};
-pub use config::{check_rtol, BdfConfig, FixedStep};
-pub use error::SolverError;
+pub use config::{check_rtol, BdfConfig, FixedStep, ORDER_RANGE, RTOL_RANGE};
+pub use error::{Allowed, SolverError};
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
 /// The Newton matrix's LU, public only so that the benchmark can price a factorisation and a
 /// solve as the integrator does them (`cargo xtask bench`, costs.csv).

@@ -297,9 +297,11 @@ impl Study {
         load_scene: impl FnOnce(&str) -> Result<String, String>,
     ) -> Result<Study, String> {
         let table: Table = text.parse().map_err(|e| crate::scene::syntax_error(text, &e))?;
-        const TOP: [&str; 8] =
-            ["scene", "formulation", "rtol", "atol", "metrics", "sampling", "set", "parameters"];
-        check_keys(&table, "", &TOP)?;
+        // The study's own keys, and the settings a study file takes at its top level.
+        let settings = SETTINGS.iter().filter(|s| s.appears.study_key).map(|s| s.name);
+        let own = ["metrics", "sampling", "set", "parameters"];
+        let top: Vec<&str> = std::iter::once("scene").chain(settings).chain(own).collect();
+        check_keys(&table, "", &top)?;
 
         let mut base = Scene::default();
         let scene = match table.get("scene") {
@@ -310,7 +312,7 @@ impl Study {
             let text = load_scene(path).map_err(|e| format!("`scene`: {e}"))?;
             base.apply_toml(&text).map_err(|e| format!("scene {path}: {e}"))?;
         }
-        for key in ["formulation", "rtol", "atol"] {
+        for key in SETTINGS.iter().filter(|s| s.appears.study_key).map(|s| s.name) {
             if let Some(v) = table.get(key) {
                 base.set_toml(key, v).map_err(|e| format!("`{key}`: {e}"))?;
             }

@@ -366,7 +366,7 @@ fn the_scene_file_comes_first_and_the_study_overrides_it() {
 /// varied, and no other setting can.
 #[test]
 fn the_parameters_a_study_takes_are_the_settings_table_s() {
-    for s in &SETTINGS {
+    for s in SETTINGS {
         let x = match s.default {
             crate::settings::Value::Real(x) => x,
             _ => 1.0,

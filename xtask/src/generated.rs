@@ -236,7 +236,7 @@ mod tests {
     #[test]
     fn the_lists_name_every_setting_and_flag() {
         let (readme, keys, synopsis) = (readme_settings(), scene_keys(), synopsis());
-        for s in &SETTINGS {
+        for s in SETTINGS {
             let name = format!("`{}`", s.name);
             assert!(readme.contains(&name) && keys.contains(&name), "{} missing", s.name);
             if let Some(flag) = s.appears.flag {

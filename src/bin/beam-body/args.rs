@@ -117,7 +117,7 @@ fn settings_help() -> String {
         "settings (a scene file holds `NAME = VALUE` lines in TOML: numbers, \"names\", true or\n\
          false; the defaults are the paper's scene):\n",
     );
-    for s in &SETTINGS {
+    for s in SETTINGS {
         let unit = s.unit().map_or(String::new(), |u| format!(" [{u}]"));
         let default = s.show(s.default);
         text.push_str(&format!("  {}{unit} = {default}   ({})\n", s.name, s.allowed()));
@@ -233,7 +233,7 @@ mod tests {
     #[test]
     fn every_setting_is_in_the_help() {
         let help = command_help("simulate").unwrap();
-        for s in &SETTINGS {
+        for s in SETTINGS {
             assert!(help.contains(&format!("\n  {}", s.name)), "{}", s.name);
         }
         assert!(help.contains("--fixed-order VALUE"));

@@ -8,7 +8,7 @@
 
 use super::coeffs::{lower_order, raise_order, StepCoeffs, NCOL, QMAX};
 use super::config::BdfConfig;
-use super::error::SolverError;
+use super::error::{Allowed, SolverError};
 use super::guard::StabilityGuard;
 use super::lu::Lu;
 use super::second_order::{Layout, SecondOrder, SecondOrderLu};
@@ -275,7 +275,7 @@ where
     pub fn set_atol(&mut self, atol: OVector<f64, D>) -> Result<(), SolverError> {
         self.check_dimension("atol", atol.len())?;
         if let Some(a) = atol.iter().find(|a| !(a.is_finite() && **a > 0.0)) {
-            let allowed = "positive and finite";
+            let allowed = Allowed::Words("positive and finite");
             return Err(SolverError::InvalidConfig { field: "atol", value: *a, allowed });
         }
         self.atol = atol;
@@ -321,14 +321,14 @@ where
     ) -> Result<(), SolverError> {
         let q = derivatives.len().saturating_sub(1);
         if !(1..=self.max_order()).contains(&q) {
-            let allowed = "y, y' and up to max_order higher derivatives";
+            let allowed = Allowed::Words("y, y' and up to max_order higher derivatives");
             return Err(SolverError::InvalidConfig { field: "history", value: q as f64, allowed });
         }
         if !(h.is_finite() && h > 0.0) {
             return Err(SolverError::InvalidConfig {
                 field: "h",
                 value: h,
-                allowed: "positive and finite",
+                allowed: Allowed::Words("positive and finite"),
             });
         }
         for d in derivatives {
@@ -371,7 +371,7 @@ where
         if len == self.dimension() {
             return Ok(());
         }
-        let allowed = "a vector of the solver's dimension";
+        let allowed = Allowed::Words("a vector of the solver's dimension");
         Err(SolverError::InvalidConfig { field, value: len as f64, allowed })
     }
 
