@@ -345,7 +345,7 @@ const fn study_key(fmu: bool, flag: &'static str) -> Appears {
 }
 
 use crate::model::MAX_ELEMENTS;
-use crate::solver::RTOL_RANGE;
+use crate::solver::{ORDER_RANGE, RTOL_RANGE};
 use Range::{Finite, Integers, NonNegative, Positive};
 use Value::{Bool, Choice, Integer, Real};
 
@@ -554,7 +554,7 @@ selects 1e-3 times the relative tolerance",
         }
         MaxOrder {
             field: solver.max_order,
-            name: "max_order", kind: Kind::Integer, range: Integers(1, 5), default: Integer(5),
+            name: "max_order", kind: Kind::Integer, range: ORDER_RANGE, default: Integer(5),
             group: Solver, appears: flag(true, "--max-order"),
             description: "Highest order of the adaptive BDF",
         }

@@ -21,7 +21,7 @@ path is measured apart, in each round: a study of 400 cases that cost almost not
 cores, is what a chunk costs a path beside its cases; divided by a default chunk's cases, the
 overhead per case. Also the cost of one chunk's CLI call alone (an empty chunk: process start,
 parsing the study, the temporary files), the basis of the choice of the CLI over Python bindings
-(ARCHITECTURE.md).
+(docs/decisions.md, *Design studies*).
 
 Writes target/bench/study.csv (every run) and target/bench/study.md; with the full run also
 docs/study.md.

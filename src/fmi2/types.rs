@@ -1,6 +1,6 @@
 //! The C types of FMI 2.0, written by hand from `fmi2TypesPlatform.h` and
 //! `fmi2FunctionTypes.h` (FMI 2.0.4): a dozen type aliases and two structs do not justify
-//! bindgen and libclang (ARCHITECTURE.md, "Dependencies").
+//! bindgen and libclang (docs/decisions.md, "Dependencies").
 #![allow(non_snake_case, non_camel_case_types, non_upper_case_globals)]
 #![allow(unsafe_code)]
 

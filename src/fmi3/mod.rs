@@ -6,11 +6,11 @@
 //! - [`exports`]: the 75 exported `fmi3…` functions (the common ones; `values`, `exchange`
 //!   and `cosim` hold the rest, which it re-exports), over the C edge both versions share
 //!   ([`crate::capi`]: registry, guard, FMU states). Those the model does not provide
-//!   (scheduled execution, clocks, configuration mode, adjoint derivatives, variable
+//!   (scheduled execution, clocks, reconfiguration mode, adjoint derivatives, variable
 //!   dependencies, types it has no variables of) return fmi3Error with a message that says
 //!   why (FMI 3.0 §2.5).
 //!
-//! What FMI 3.0 changes for this model (ARCHITECTURE.md, "FMI 3.0"): the setup comes with
+//! What FMI 3.0 changes for this model (docs/interfaces.md, "FMI 3.0"): the setup comes with
 //! EnterInitializationMode; enumerations are Int64; there are no input derivatives, and the
 //! host may hand over φ inside a step through its intermediate-update callback instead;
 //! co-simulation has no event mode (`hasEventMode = false`).

@@ -608,7 +608,7 @@ pub const VARIABLES: &[Variable] = &[
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates
 /// (v1, ϑ1) and their rates. Its model description fixes them, so it runs one element of
-/// the quadratic beam (ARCHITECTURE.md, "Model Exchange").
+/// the quadratic beam (docs/interfaces.md, "Model Exchange").
 /// Then the two states of the filter of φ, for a host that sends φ alone.
 pub const STATES: [Var; 6] =
     [Var::V1, Var::Theta1, Var::Dv1, Var::Dtheta1, Var::PhiFiltered, Var::DphiFiltered];
@@ -622,7 +622,7 @@ pub const DERIVATIVES: [Var; 6] = [
     Var::DdphiFiltered,
 ];
 /// FMI 3.0 Model Exchange's continuous states: the arrays q and dq, sized by n_elements,
-/// so that it runs any beam (ARCHITECTURE.md, "FMI 3.0").
+/// so that it runs any beam (docs/interfaces.md, "FMI 3.0").
 /// Then the filter's two, as in FMI 2.0.
 pub const STATES3: [Var; 4] = [Var::Q, Var::Dq, Var::PhiFiltered, Var::DphiFiltered];
 /// Their derivatives, in the same order.

@@ -478,7 +478,7 @@ impl Run {
     }
 
     /// The coordinates q at `t` inside the last step (dense output) into `out`: every node's
-    /// (v_k, ϑ_k), k = 1..n, the tip last ([`BeamN::nodal_shape`]); (v1, ϑ1) for the paper's
+    /// (v_k, ϑ_k), k = 1..n, the tip last ([`Theory::nodal_shape`](super::theory::Theory::nodal_shape)); (v1, ϑ1) for the paper's
     /// model.
     pub fn coordinates_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
         out.clear();

@@ -17,7 +17,7 @@
 //!   holds a universal binary, so that FMPy on an Apple-silicon Mac finds its arm64 slice there,
 //!   and Linux aarch64 gets a second archive, `BeamBody-aarch64-linux.fmu`, whose linux64 holds
 //!   the aarch64 binary (an ELF file has one architecture, so one archive cannot serve both
-//!   Linux architectures from linux64). ARCHITECTURE.md says why.
+//!   Linux architectures from linux64). docs/decisions.md says why (*Where the binaries go*).
 //! - `BeamBody-fmi3.fmu`, FMI 3.0 (its own modelDescription.xml): the same libraries, which
 //!   export the fmi2 and the fmi3 functions, in folders named by FMI 3.0's platform tuples:
 //!   x86_64-linux, x86_64-windows, x86_64-darwin (the x86_64 build, not the universal one),
