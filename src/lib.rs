@@ -33,6 +33,7 @@
 #![deny(unsafe_code)]
 
 pub mod capi;
+pub mod choice;
 #[cfg(feature = "cli")]
 pub mod csv;
 pub mod fmi;

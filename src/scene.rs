@@ -7,7 +7,7 @@
 #![forbid(unsafe_code)]
 
 use crate::model::{BeamBody, BeamModel, Formulation, Interpolation, PaperLaw, Params, RangeCheck};
-use crate::settings::{Key, Kind, Setting, Value, SETTINGS};
+use crate::settings::{Field, Key, Kind, Setting, Value, SETTINGS};
 use crate::solver::{BdfConfig, FixedStep};
 
 /// Initial state of the beam [m, rad, m/s, rad/s]. The DAE's u2, u̇2 start consistent.
@@ -132,73 +132,7 @@ impl Default for Scene {
     }
 }
 
-/// A scene's field that holds a setting: its value as the table has it, and back.
-trait Field {
-    fn value(&self, kind: Kind) -> Value;
-    /// Stores a value the table has checked.
-    fn store(&mut self, value: Value);
-}
-
-impl Field for f64 {
-    fn value(&self, _: Kind) -> Value {
-        Value::Real(*self)
-    }
-    fn store(&mut self, value: Value) {
-        *self = if let Value::Real(x) = value { x } else { f64::NAN };
-    }
-}
-
-impl Field for bool {
-    fn value(&self, _: Kind) -> Value {
-        Value::Bool(*self)
-    }
-    fn store(&mut self, value: Value) {
-        *self = matches!(value, Value::Bool(true));
-    }
-}
-
-/// A count, or the index of an item where the setting is a choice (`columns`).
-impl Field for usize {
-    fn value(&self, kind: Kind) -> Value {
-        match kind {
-            Kind::Choice(_) => Value::Choice(*self),
-            _ => Value::Integer(*self as i64),
-        }
-    }
-    fn store(&mut self, value: Value) {
-        *self = match value {
-            Value::Integer(k) => k.max(0) as usize,
-            Value::Choice(k) => k,
-            _ => 0,
-        };
-    }
-}
-
-impl Field for u64 {
-    fn value(&self, _: Kind) -> Value {
-        Value::Integer(*self as i64)
-    }
-    fn store(&mut self, value: Value) {
-        *self = if let Value::Integer(k) = value { k.max(0) as u64 } else { 0 };
-    }
-}
-
-/// A choice: the item's index in `ALL`, the order of the enumeration.
-macro_rules! choice_field {
-    ($($t:ty),*) => {$(
-        impl Field for $t {
-            fn value(&self, _: Kind) -> Value {
-                Value::Choice(<$t>::ALL.iter().position(|a| a == self).expect("every item is listed"))
-            }
-            fn store(&mut self, value: Value) {
-                let k = if let Value::Choice(k) = value { k } else { 0 };
-                *self = <$t>::ALL[k.min(<$t>::ALL.len() - 1)];
-            }
-        }
-    )*};
-}
-
-choice_field!(Formulation, PhiSource, Interpolation, RangeCheck, BeamModel);
+crate::settings::choice_field!(PhiSource);
 
 /// The scene's `get` and `put` from the declaration of the settings: each key reads and writes
 /// its field.
@@ -216,7 +150,7 @@ macro_rules! accessors {
             /// Stores a checked value.
             fn put(&mut self, key: Key, value: Value) {
                 match key {
-                    $(Key::$key => self.$($field).+.store(value),)*
+                    $(Key::$key => self.$($field).+ = Field::from_value(value),)*
                 }
             }
         }

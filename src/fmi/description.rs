@@ -5,6 +5,9 @@
 //! them. No I/O, no `unsafe`.
 #![forbid(unsafe_code)]
 
+/// The enumeration of a setting, which a description lists as an `<EnumerationType>`.
+pub use crate::choice::EnumType;
+
 /// `<DefaultExperiment>`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DefaultExperiment {
@@ -251,26 +254,3 @@ pub const LOG_CATEGORIES: &[(&str, &str)] = &[
     ("logCalls", "Every call of the FMI API, with its arguments"),
     ("logAll", "All of the above"),
 ];
-
-/// An enumeration's items (FMI: an `<EnumerationType>`, item `k` has the value `k + 1`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EnumType {
-    /// The FMI type name.
-    pub name: &'static str,
-    pub description: &'static str,
-    /// (name, description), in order.
-    pub items: &'static [(&'static str, &'static str)],
-}
-
-impl EnumType {
-    /// The index of the item called `name`.
-    pub fn index(&self, name: &str) -> Option<usize> {
-        self.items.iter().position(|(n, _)| *n == name)
-    }
-
-    /// The items' names, for messages: "a, b, c".
-    pub fn names(&self) -> String {
-        let names: Vec<&str> = self.items.iter().map(|(n, _)| *n).collect();
-        names.join(", ")
-    }
-}

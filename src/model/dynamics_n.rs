@@ -32,9 +32,8 @@ use super::phi::Phi;
 use crate::math;
 use nalgebra::{DMatrix, DVector};
 
-/// The most elements: the beam's highest frequency grows as n², and 32 elements resolve the
-/// first modes far beyond the model's other approximations.
-pub const MAX_ELEMENTS: usize = 32;
+/// The most elements (the range of `n_elements`).
+pub use crate::settings::MAX_ELEMENTS;
 /// The most coordinates, for the right-hand side's buffers on the stack.
 const MAX_DOFS: usize = 2 * MAX_ELEMENTS;
 

@@ -124,3 +124,5 @@ pub(crate) fn by_name<T: Copy>(
         format!("`{key}` = {text}: must be one of {}", names.join(", "))
     })
 }
+
+crate::settings::choice_field!(Formulation, BeamModel, RangeCheck);

@@ -1,57 +1,38 @@
 use super::formulation::BeamModel;
 use crate::range::Range;
+use crate::settings::{fields_of, Field, Key, Setting, Value};
 use std::fmt;
 
-/// Physical parameters (SI units). Defaults are the paper's example (§4).
+/// Physical parameters (SI units). Their defaults (the paper's example, §4) and ranges are the
+/// settings table's (`settings::for_each_setting!`), which `Default` and `validate` take.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Params {
-    /// Beam length l [m]. Positive. Default 2.5.
+    /// Beam length l [m].
     pub l: f64,
-    /// Bending stiffness EI [N·m²]. Positive. Default 1000.
+    /// Bending stiffness EI [N·m²].
     pub ei: f64,
-    /// Beam mass per unit length m [kg/m]. Non-negative. Default 2.
+    /// Beam mass per unit length m [kg/m].
     pub m: f64,
-    /// Body mass M2 [kg]. Positive. Default 12.
+    /// Body mass M2 [kg].
     pub m2: f64,
-    /// Body moment of inertia about its centre of mass J_C [kg·m²]. Non-negative. Default 1.
+    /// Body moment of inertia about its centre of mass J_C [kg·m²].
     pub j_c: f64,
-    /// Distance from the hinge to the body's centre of mass r [m]. Non-negative. Default 0.5.
+    /// Distance from the hinge to the body's centre of mass r [m].
     pub r: f64,
-    /// Gravity along +x, the undeformed beam axis, g [m/s²]. Any finite value. Default 10.
+    /// Gravity along +x, the undeformed beam axis, g [m/s²].
     pub g: f64,
-    /// Cubic Hermite elements of the beam, 1..=32. Default 1 (the paper's model).
+    /// Cubic Hermite elements of the beam.
     pub n_elements: usize,
-    /// Rayleigh damping of the beam, D = αM_b + βK: α [1/s] and β [s], each ≥ 0. Default 0.
+    /// Rayleigh damping of the beam, D = αM_b + βK: α [1/s] and β [s].
     pub damping_alpha: f64,
     pub damping_beta: f64,
     /// Rayleigh damping given as the ratio ζ ≥ 0 of the first two modes at rest at φ = 0,
-    /// instead of α and β. Default 0.
+    /// instead of α and β.
     pub damping_ratio: f64,
     /// The beam's theory: the paper's quadratic cut, or the geometrically exact elastica.
-    /// Default quadratic.
     pub beam: BeamModel,
-    /// Gravity on the beam itself, along +x (the paper leaves it out). Default false.
+    /// Gravity on the beam itself, along +x (the paper leaves it out).
     pub beam_gravity: bool,
-}
-
-impl Default for Params {
-    fn default() -> Self {
-        Self {
-            l: 2.5,
-            ei: 1000.0,
-            m: 2.0,
-            m2: 12.0,
-            j_c: 1.0,
-            r: 0.5,
-            g: 10.0,
-            n_elements: 1,
-            damping_alpha: 0.0,
-            damping_beta: 0.0,
-            damping_ratio: 0.0,
-            beam: BeamModel::Quadratic,
-            beam_gravity: false,
-        }
-    }
 }
 
 /// A parameter outside its allowed range.
@@ -75,33 +56,25 @@ impl fmt::Display for ParamError {
 
 impl std::error::Error for ParamError {}
 
-pub(crate) fn check(name: &'static str, value: f64, allowed: Range) -> Result<(), ParamError> {
-    if allowed.contains(value) {
+/// The value of a part's field against its setting's range: a number outside it is an error
+/// naming the setting (choices and switches hold only valid values).
+pub(crate) fn check_setting(key: Key, field: &impl Field) -> Result<(), ParamError> {
+    let s = Setting::of(key);
+    let value = match field.value(s.kind) {
+        Value::Real(x) => x,
+        Value::Integer(k) => k as f64,
+        Value::Choice(_) | Value::Bool(_) => return Ok(()),
+    };
+    if s.range.contains(value) {
         Ok(())
     } else {
-        Err(ParamError { name, value, allowed })
+        Err(ParamError { name: s.name, value, allowed: s.range })
     }
 }
 
-impl Params {
-    /// Checks every range (the settings table checks them too, before; the model checks what
-    /// it is given). The mass matrix, which depends on the state too, is checked by
-    /// [`BeamBody::check_start`](super::BeamBody::check_start).
-    pub fn validate(&self) -> Result<(), ParamError> {
-        check("l", self.l, Range::Positive)?;
-        check("EI", self.ei, Range::Positive)?;
-        check("m", self.m, Range::NonNegative)?;
-        check("M2", self.m2, Range::Positive)?;
-        check("J_C", self.j_c, Range::NonNegative)?;
-        check("r", self.r, Range::NonNegative)?;
-        check("g", self.g, Range::Finite)?;
-        let elements = Range::Integers(1, super::MAX_ELEMENTS as i64);
-        check("n_elements", self.n_elements as f64, elements)?;
-        check("damping_alpha", self.damping_alpha, Range::NonNegative)?;
-        check("damping_beta", self.damping_beta, Range::NonNegative)?;
-        check("damping_ratio", self.damping_ratio, Range::NonNegative)
-    }
+crate::settings::for_each_setting!(fields_of, params Params);
 
+impl Params {
     /// Whether these are the paper's model: one element of the quadratic beam without damping
     /// or the beam's weight, which the two-coordinate equations of `dynamics.rs` integrate on
     /// the stack.

@@ -1,8 +1,8 @@
 //! Sources of the prescribed hinge angle φ(t) and its first two derivatives.
 
-use super::params::{check, ParamError};
+use super::params::{check_setting, ParamError};
 use crate::math;
-use crate::range::Range;
+use crate::settings::fields_of;
 use std::f64::consts::PI;
 
 /// φ, φ', φ'' at one instant [rad, rad/s, rad/s²].
@@ -14,30 +14,21 @@ pub struct Phi {
 }
 
 /// The paper's turn (§4): φ = φ0 + φ_end·sin²(πt/(2·t_rot)) for 0 ≤ t ≤ t_rot, then
-/// φ0 + φ_end. φ'' jumps at t = 0 and at t = t_rot.
+/// φ0 + φ_end. φ'' jumps at t = 0 and at t = t_rot. Its defaults and ranges are the settings
+/// table's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PaperLaw {
-    /// Angle before the turn φ0 [rad]. Default 0 (not in the paper; 0 reproduces it).
+    /// Angle before the turn φ0 [rad] (not in the paper; 0 reproduces it).
     pub phi0: f64,
-    /// Angle turned φ_end [rad]. Default π.
+    /// Angle turned φ_end [rad].
     pub phi_end: f64,
-    /// Duration of the turn t_rot [s], > 0. Default 0.85 (the paper's T).
+    /// Duration of the turn t_rot [s] (the paper's T).
     pub t_rot: f64,
 }
 
-impl Default for PaperLaw {
-    fn default() -> Self {
-        Self { phi0: 0.0, phi_end: PI, t_rot: 0.85 }
-    }
-}
+crate::settings::for_each_setting!(fields_of, law PaperLaw);
 
 impl PaperLaw {
-    pub fn validate(&self) -> Result<(), ParamError> {
-        check("phi0", self.phi0, Range::Finite)?;
-        check("phi_end", self.phi_end, Range::Finite)?;
-        check("t_rot", self.t_rot, Range::Positive)
-    }
-
     /// The law at t: the turn's formula before t_rot, the hold from t_rot on.
     pub fn eval(&self, t: f64) -> Phi {
         self.piece_from(t).eval(t)

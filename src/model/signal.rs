@@ -588,6 +588,8 @@ fn newton(z: &[f64], c: &[f64], x: f64) -> (f64, f64, f64) {
     (p, dp, ddp)
 }
 
+crate::settings::choice_field!(Interpolation);
+
 #[cfg(test)]
 mod tests {
     use super::*;
