@@ -12,6 +12,8 @@ use crate::model::{
     RangeCheck, Sample,
 };
 use crate::scene::{PhiSource, Scene};
+#[cfg(doc)]
+use crate::solver::{Bdf, BdfConfig};
 use crate::solver::{RangeViolation, SolverError, Stats};
 use crate::visit::StateVisitor;
 
@@ -26,8 +28,8 @@ pub enum PhiInput {
     Host(HostSignal),
 }
 
-/// The integrator and the model for a formulation chosen at run time, with the φ input they
-/// are driven by. The standalone driver ([`simulate`]) and the FMU both step through it
+/// The integrator and the theory a scene chose at run time, with the φ input they are driven
+/// by. The standalone driver ([`simulate`](super::simulate)) and the FMU both step through it
 /// ([`step_to`](Self::step_to)), so they integrate the same way. `Clone` copies everything
 /// (FMU state save and restore).
 #[derive(Clone, Debug)]
@@ -478,8 +480,9 @@ impl Run {
     }
 
     /// The coordinates q at `t` inside the last step (dense output) into `out`: every node's
-    /// (v_k, ϑ_k), k = 1..n, the tip last ([`Theory::nodal_shape`](super::theory::Theory::nodal_shape)); (v1, ϑ1) for the paper's
-    /// model.
+    /// (v_k, ϑ_k), k = 1..n, the tip last
+    /// ([`Theory::nodal_shape`](super::theory::Theory::nodal_shape)); (v1, ϑ1) for the
+    /// paper's model.
     pub fn coordinates_at(&self, t: f64, out: &mut Vec<f64>) -> Result<(), SolverError> {
         out.clear();
         out.extend(self.bdf.nodal_shape_at(t)?);

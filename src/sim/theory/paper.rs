@@ -59,8 +59,8 @@ impl Theory for Paper {
     }
 }
 
-/// The paper's DAE: y = (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2), the constraint differentiated twice, projected
-/// onto it after each step when stabilised.
+/// The paper's DAE: y = (v1, ϑ1, u2, v̇1, ϑ̇1, u̇2), the constraint differentiated twice,
+/// projected onto it after each step when stabilised.
 #[derive(Clone, Debug)]
 pub struct PaperDae {
     model: BeamBody,
