@@ -1,5 +1,6 @@
 """The source's layout rules (ARCHITECTURE.md; issue 45): no import cycle between the modules of src/
-(the library) or of xtask/src/, and no file of src/ over 750 lines before its tests.
+(the library) or of xtask/src/, no file of src/ over 750 lines before its tests, and the two front
+documents short: README.md a front page of at most 250 lines, ARCHITECTURE.md a map of at most 300.
 
 An import is a path `crate::a::b` or `super::...` in the code (comments and tests left out), taken to
 the deepest module it names; a module's own parent or children do not count (a parent declares its
@@ -126,3 +127,11 @@ def test_no_source_file_is_over_750_lines_before_its_tests():
                 if n > MAX_LINES:
                     long[os.path.relpath(path, REPO)] = n
     assert not long, long
+
+
+@pytest.mark.parametrize("name,limit", [("README.md", 250), ("ARCHITECTURE.md", 300)])
+def test_the_front_documents_stay_short(name, limit):
+    """History and long measurements belong in docs/; these two are read first."""
+    lines = (REPO / name).read_text(encoding="utf-8").count("\n")
+    assert lines <= limit, f"{name} has {lines} lines; at most {limit} (move detail to docs/)"
+
