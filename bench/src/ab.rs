@@ -104,9 +104,11 @@ fn build(dir: &Path, name: &str, library: &Path) -> Result<PathBuf> {
     let crate_dir = dir.join(name);
     std::fs::create_dir_all(&crate_dir)
         .map_err(|e| format!("cannot create {}: {e}", relative(&crate_dir)))?;
-    // A library with the settings table (src/settings.rs) reads scene files with the feature
-    // `cli`; the runner's feature `settings` picks the matching calls (runner.rs).
-    let settings = library.join("src").join("settings.rs").exists();
+    // A library with the settings table (src/settings.rs, later src/settings/) reads scene
+    // files with the feature `cli`; the runner's feature `settings` picks the matching calls
+    // (runner.rs).
+    let src = library.join("src");
+    let settings = src.join("settings.rs").exists() || src.join("settings").is_dir();
     let (features, runner_features) = if settings {
         (", features = [\"cli\"]", "[features]\ndefault = [\"settings\"]\nsettings = []\n\n")
     } else {
