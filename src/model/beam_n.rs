@@ -9,7 +9,7 @@ use super::formulation::{BeamModel, Formulation};
 use super::params::Params;
 use nalgebra::DVector;
 
-/// The beam in n elements (or damped, or exact), with the body. A run holds one, boxed.
+/// The beam in n elements (or damped, or exact), with the body.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum BeamN {

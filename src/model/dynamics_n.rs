@@ -163,13 +163,13 @@ impl BeamBodyN {
         self.rayleigh
     }
 
-    /// The number of coordinates, 2n.
     /// The tip's deflection and slope (v1, ϑ1) at q: its coordinates.
     pub fn tip_values(&self, q: &[f64]) -> (f64, f64) {
         let t = self.beam.tip();
         (q[t], q[t + 1])
     }
 
+    /// The number of coordinates, 2n.
     pub fn dofs(&self) -> usize {
         self.beam.dofs()
     }

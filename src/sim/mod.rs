@@ -251,4 +251,44 @@ mod tests {
             assert_eq!(&y[..n], &want[..], "{formulation}");
         }
     }
+
+    /// `motion_at` gives q, q̇ and q̈, a third each, for every theory and formulation: the tip's
+    /// two coordinates for the paper's model, every node's for n elements, without the DAE's u2
+    /// (whose state is (q, u2, q̇, u̇2)); for the quadratic beam q is `coordinates_at`'s and the
+    /// tip's rates and accelerations are the outputs'. Before, the DAE in n elements gave
+    /// (q, u2, ...) and FMI 3.0's `q`, `dq`, `ddq` refused to be read.
+    #[test]
+    fn motion_at_is_q_dq_ddq_in_every_formulation() {
+        use crate::model::BeamModel;
+        for (n, beam) in
+            [(1, BeamModel::Quadratic), (2, BeamModel::Quadratic), (2, BeamModel::Exact)]
+        {
+            for formulation in Formulation::ALL {
+                if beam == BeamModel::Exact && formulation != Formulation::Reduced {
+                    continue;
+                }
+                let mut scene = Scene { formulation, ..Scene::default() };
+                (scene.params.n_elements, scene.params.beam) = (n, beam);
+                let mut run = Run::start(&scene, 0.0, host_sample(&scene, 0.0), 1_000_000).unwrap();
+                let (mut motion, mut q) = (Vec::new(), Vec::new());
+                run.step_to(0.5).unwrap();
+                run.motion_at(0.5, &mut motion).unwrap();
+                run.coordinates_at(0.5, &mut q).unwrap();
+                let what = format!("{n} {beam:?} {formulation}");
+                assert_eq!(motion.len(), 3 * 2 * n, "{what}");
+                let k = run.kinematics_at(0.5).unwrap();
+                let tip = 2 * n - 2;
+                let rates = &motion[2 * n..4 * n];
+                // The exact beam's coordinates are (w_k, α_k): its tip's α is ϑ1.
+                assert_eq!(rates[tip + 1], k.dtheta1, "{what}");
+                if beam == BeamModel::Quadratic {
+                    assert_eq!(rates[tip], k.dv1, "{what}");
+                    assert_eq!(&motion[..2 * n], &q[..], "{what}");
+                    let acc = &motion[4 * n..];
+                    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+                    assert!(close(acc[tip], k.ddv1) && close(acc[tip + 1], k.ddtheta1), "{what}");
+                }
+            }
+        }
+    }
 }

@@ -149,6 +149,25 @@ fn a_dae_gives_q_and_dq() {
     assert!(ddq.iter().all(|x| x.is_finite() && *x != 0.0), "{ddq:?}");
 }
 
+/// So in n elements: the state is (q, u2, q̇, u̇2), and `q`, `dq`, `ddq` are 2n values each, the
+/// tip's last (they were 2n + 1, and reading them was refused).
+#[test]
+fn a_dae_in_elements_gives_q_and_dq() {
+    let h = Host::cs("dae arrays in elements");
+    h.ok(h.set_enum(Var::PhiSource, 2));
+    h.ok(h.set_enum(Var::Formulation, 2));
+    h.ok(unsafe { fmi3EnterConfigurationMode(h.c) });
+    h.ok(h.set_elements(2));
+    h.ok(unsafe { fmi3ExitConfigurationMode(h.c) });
+    h.ok(h.enter(None));
+    h.ok(h.exit());
+    h.steps(0.0, 0.01, 20);
+    let (q, dq, ddq) = (h.array(Var::Q, 4), h.array(Var::Dq, 4), h.array(Var::Ddq, 4));
+    assert_eq!(q[2..], [h.real(Var::V1), h.real(Var::Theta1)]);
+    assert_eq!(dq[2..], [h.real(Var::Dv1), h.real(Var::Dtheta1)]);
+    assert!(ddq.iter().all(|x| x.is_finite() && *x != 0.0), "{ddq:?}");
+}
+
 /// Model Exchange of the beam in 3 elements: 14 states, q and dq as arrays in the order of
 /// x, then the two of the filter of φ; integrated by RK4 through the FMI 3.0 calls, it meets FMI 3.0 co-simulation of the same
 /// beam (BDF at rtol 1e-10) to the accuracy of both. The directional derivative takes and

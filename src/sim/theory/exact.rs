@@ -46,7 +46,7 @@ impl Theory for Exact {
     }
 
     fn motion(sys: &ExactSystem<'_>, t: f64, y: &DVector<f64>, out: &mut Vec<f64>) {
-        motion_of(sys, t, y, out);
+        motion_of(sys, sys.model.dofs(), t, y, out);
     }
 
     /// The centreline's y = r_y(s_k) and the section angle α(s_k) at the arc length s_k = k·l/n.

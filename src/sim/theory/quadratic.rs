@@ -48,9 +48,10 @@ impl Theory for Quadratic {
         (!self.formulation.is_dae()).then_some(Layout::Banded)
     }
 
-    /// Every coordinate, rate and acceleration: q, q̇ of the state, q̈ of f.
+    /// Every coordinate, rate and acceleration: q, q̇ of the state, q̈ of f; without the DAE's
+    /// u2, u̇2, ü2.
     fn motion(sys: &ElementsSystem<'_>, t: f64, y: &DVector<f64>, out: &mut Vec<f64>) {
-        motion_of(sys, t, y, out);
+        motion_of(sys, sys.model.dofs(), t, y, out);
     }
 
     fn nodal_shape(&self, y: &[f64]) -> Vec<f64> {
@@ -62,11 +63,18 @@ impl Theory for Quadratic {
     }
 }
 
-/// The state and the second half of f at (t, y): the motion of a beam in n elements in
-/// minimal coordinates, y = (q, q̇), q̈ the second half of f.
-pub(super) fn motion_of<S: OdeSystem<Dyn>>(sys: &S, t: f64, y: &DVector<f64>, out: &mut Vec<f64>) {
+/// The motion of a beam's `nq` coordinates q at (t, y): q and q̇ from the state, y = (q, q̇) or,
+/// with the DAE's u2, (q, u2, q̇, u̇2); q̈ from f, whose second half is the accelerations.
+pub(super) fn motion_of<S: OdeSystem<Dyn>>(
+    sys: &S,
+    nq: usize,
+    t: f64,
+    y: &DVector<f64>,
+    out: &mut Vec<f64>,
+) {
     let dy = sys.rhs(t, y);
-    let n = y.len() / 2;
-    out.extend_from_slice(y.as_slice());
-    out.extend_from_slice(&dy.as_slice()[n..]);
+    let nc = y.len() / 2;
+    out.extend_from_slice(&y.as_slice()[..nq]);
+    out.extend_from_slice(&y.as_slice()[nc..nc + nq]);
+    out.extend_from_slice(&dy.as_slice()[nc..nc + nq]);
 }
