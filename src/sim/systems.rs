@@ -9,7 +9,7 @@ use crate::scene::InitialState;
 use nalgebra::SVector;
 
 /// The system of the four-state formulations (reduced, linear) on piece `phi`: the one step
-/// from a formulation to its equations, for the driver and the benchmark's peers.
+/// from a formulation to its equations, for the paper's theories and the benchmark's peers.
 pub fn two_dof(model: &BeamBody, phi: PhiPiece, formulation: Formulation) -> TwoDofSystem<'_> {
     TwoDofSystem { model, phi, linear: formulation == Formulation::Linear, range_check: true }
 }

@@ -7,21 +7,21 @@
 use super::Theory;
 use crate::model::{BeamBody, DaeSystem, Formulation, Kinematics, PhiPiece, TwoDofSystem};
 use crate::scene::InitialState;
-use crate::sim::systems::{dae_start, two_dof_start};
+use crate::sim::systems::{dae, dae_start, two_dof, two_dof_start};
 use nalgebra::{Vector4, Vector6, U4, U6};
 
 /// The paper's model in minimal coordinates: y = (v1, ϑ1, v̇1, ϑ̇1).
 #[derive(Clone, Debug)]
 pub struct Paper {
     model: BeamBody,
-    /// Eq. (16) rather than (15).
-    linear: bool,
+    /// Reduced (eq. 15) or linear (eq. 16).
+    formulation: Formulation,
 }
 
 impl Paper {
     /// `formulation` reduced or linear.
     pub fn new(model: BeamBody, formulation: Formulation) -> Self {
-        Paper { model, linear: formulation == Formulation::Linear }
+        Paper { model, formulation }
     }
 }
 
@@ -34,7 +34,7 @@ impl Theory for Paper {
     }
 
     fn system(&self, phi: PhiPiece, range_check: bool) -> TwoDofSystem<'_> {
-        TwoDofSystem { model: &self.model, phi, linear: self.linear, range_check }
+        TwoDofSystem { range_check, ..two_dof(&self.model, phi, self.formulation) }
     }
 
     fn kinematics(sys: &TwoDofSystem<'_>, t: f64, y: &Vector4<f64>) -> Kinematics {
@@ -64,13 +64,14 @@ impl Theory for Paper {
 #[derive(Clone, Debug)]
 pub struct PaperDae {
     model: BeamBody,
-    stabilized: bool,
+    /// Dae or dae_stabilized.
+    formulation: Formulation,
 }
 
 impl PaperDae {
     /// `formulation` dae or dae_stabilized.
     pub fn new(model: BeamBody, formulation: Formulation) -> Self {
-        PaperDae { model, stabilized: formulation == Formulation::DaeStabilized }
+        PaperDae { model, formulation }
     }
 }
 
@@ -83,7 +84,7 @@ impl Theory for PaperDae {
     }
 
     fn system(&self, phi: PhiPiece, range_check: bool) -> DaeSystem<'_> {
-        DaeSystem { model: &self.model, phi, stabilized: self.stabilized, range_check }
+        DaeSystem { range_check, ..dae(&self.model, phi, self.formulation) }
     }
 
     fn kinematics(sys: &DaeSystem<'_>, t: f64, y: &Vector6<f64>) -> Kinematics {
