@@ -8,7 +8,7 @@
 
 use crate::model::{BeamBody, BeamModel, Formulation, Interpolation, PaperLaw, Params, RangeCheck};
 use crate::settings::{Field, Key, Kind, Setting, Value, SETTINGS};
-use crate::solver::{BdfConfig, FixedStep};
+use crate::solver::{BdfConfig, FixedStep, Method};
 
 /// Initial state of the beam [m, rad, m/s, rad/s]. The DAE's u2, u̇2 start consistent.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -44,6 +44,7 @@ pub struct SolverSettings {
     /// 0: order 2 (with `fixed_step`).
     pub fixed_order: usize,
     pub stability_guard: bool,
+    pub integrator: Method,
 }
 
 impl SolverSettings {
@@ -56,6 +57,7 @@ impl SolverSettings {
             max_order: self.max_order,
             fixed_step: (self.fixed_step > 0.0).then_some(FixedStep { h: self.fixed_step, order }),
             stability_guard: self.stability_guard,
+            method: self.integrator,
             max_steps,
             ..BdfConfig::default()
         }

@@ -1,13 +1,13 @@
 //! Integration tests of the BDF integrator on problems with known solutions.
 
+mod bytes;
+use bytes::{read_into, to_bytes};
+
 use beam_body::math::{cos, exp, log2, powi, sin};
 use beam_body::solver::problems::SlowAndFast;
 use beam_body::solver::{Bdf, BdfConfig, FixedStep, OdeSystem};
-use beam_body::visit::StateVisitor;
-use nalgebra::allocator::Allocator;
 use nalgebra::{
-    DVector, DefaultAllocator, Dim, Dyn, Matrix2, SMatrix, SVector, Vector1, Vector2, Vector3, U1,
-    U2, U3, U4,
+    DVector, Dyn, Matrix2, SMatrix, SVector, Vector1, Vector2, Vector3, U1, U2, U3, U4,
 };
 
 /// Prothero–Robinson: y' = λ(y − sin t) + cos t, exact solution y = sin t.
@@ -236,91 +236,8 @@ fn stability_guard_declines_when_capping_would_spoil_a_resolved_oscillation() {
     assert!(err_on < 1e-4, "slow error {err_on}");
 }
 
-/// Writes a state as little-endian bytes, as an FMU's `fmi2SerializeFMUstate` would: reals by
-/// their bits, counts as u64, flags as one byte.
-struct ByteWriter(Vec<u8>);
-
-impl StateVisitor for ByteWriter {
-    fn real(&mut self, _: &'static str, x: &mut f64) {
-        self.0.extend(x.to_bits().to_le_bytes());
-    }
-    fn count(&mut self, _: &'static str, x: &mut u64) {
-        self.0.extend(x.to_le_bytes());
-    }
-    fn flag(&mut self, _: &'static str, x: &mut bool) {
-        self.0.push(u8::from(*x));
-    }
-}
-
-/// Reads what [`ByteWriter`] wrote from untrusted bytes. The visitor cannot fail, so the
-/// first problem (too few bytes, a flag byte other than 0 or 1) is recorded and the rest of
-/// the fields are left alone.
-struct ByteReader<'a> {
-    bytes: &'a [u8],
-    error: Option<&'static str>,
-}
-
-impl ByteReader<'_> {
-    fn take<const K: usize>(&mut self, name: &'static str) -> Option<[u8; K]> {
-        if self.error.is_some() {
-            return None;
-        }
-        match self.bytes.split_first_chunk::<K>() {
-            Some((head, rest)) => {
-                self.bytes = rest;
-                Some(*head)
-            }
-            None => {
-                self.error = Some(name);
-                None
-            }
-        }
-    }
-}
-
-impl StateVisitor for ByteReader<'_> {
-    fn real(&mut self, name: &'static str, x: &mut f64) {
-        if let Some(b) = self.take::<8>(name) {
-            *x = f64::from_bits(u64::from_le_bytes(b));
-        }
-    }
-    fn count(&mut self, name: &'static str, x: &mut u64) {
-        if let Some(b) = self.take::<8>(name) {
-            *x = u64::from_le_bytes(b);
-        }
-    }
-    fn flag(&mut self, name: &'static str, x: &mut bool) {
-        match self.take::<1>(name) {
-            Some([0]) => *x = false,
-            Some([1]) => *x = true,
-            Some(_) => self.error = Some(name),
-            None => {}
-        }
-    }
-}
-
-fn to_bytes<D: Dim>(s: &Bdf<D>) -> Vec<u8>
-where
-    DefaultAllocator: Allocator<D> + Allocator<D, D>,
-{
-    let mut w = ByteWriter(Vec::new());
-    s.clone().visit_state(&mut w);
-    w.0
-}
-
-/// Reads a state from bytes into a fresh solver with configuration `cfg`.
 fn from_bytes(cfg: &BdfConfig, bytes: &[u8]) -> Result<Bdf<U3>, String> {
-    let mut s = robertson_solver(cfg);
-    let mut r = ByteReader { bytes, error: None };
-    s.visit_state(&mut r);
-    if let Some(field) = r.error {
-        return Err(format!("truncated or malformed at `{field}`"));
-    }
-    if !r.bytes.is_empty() {
-        return Err(format!("{} bytes left over", r.bytes.len()));
-    }
-    s.check_state().map_err(|e| e.to_string())?;
-    Ok(s)
+    read_into(robertson_solver(cfg), bytes)
 }
 
 /// A Robertson run saved to bytes at t = 1 and restored into a new solver ends at t = 40 with
@@ -425,11 +342,7 @@ fn a_run_time_dimension_gives_the_fixed_dimension_s_results() {
     assert!(fixed.stats().jac_evals > 1 && fixed.stats().steps > 100);
     let bytes = to_bytes(&dynamic);
     assert_eq!(bytes.len(), to_bytes(&fixed).len(), "the states' layouts");
-    let mut restored = Bdf::new(cfg, 0.0, DVector::zeros(4)).unwrap();
-    let mut reader = ByteReader { bytes: &bytes, error: None };
-    restored.visit_state(&mut reader);
-    assert!(reader.error.is_none() && reader.bytes.is_empty());
-    restored.check_state().unwrap();
+    let mut restored = read_into(Bdf::new(cfg, 0.0, DVector::zeros(4)).unwrap(), &bytes).unwrap();
     for t in [205.0, 230.0] {
         dynamic.advance(&dyn_sys, t, f64::INFINITY).unwrap();
         restored.advance(&dyn_sys, t, f64::INFINITY).unwrap();

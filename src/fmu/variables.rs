@@ -154,6 +154,7 @@ pub enum Var {
     PhiFiltered,
     DphiFiltered,
     DdphiFiltered,
+    Integrator,
 }
 
 impl Var {
@@ -604,6 +605,7 @@ pub const VARIABLES: &[Variable] = &[
         "The angular acceleration from the filter: the derivative of dphi_filtered \
          (co-simulation: ddphi_applied)",
     ),
+    param(Var::Integrator, Key::Integrator),
 ];
 
 /// FMI 2.0 Model Exchange's continuous states, in the order of x: the paper's coordinates

@@ -53,6 +53,19 @@ pub const RANGE_CHECK_TYPE: EnumType = EnumType {
     ],
 };
 
+pub const INTEGRATOR_TYPE: EnumType = EnumType {
+    name: "Integrator",
+    description: "The integrator inside the model",
+    items: &[
+        ("bdf", "variable-order BDF (CVODE's method), orders 1 to max_order, with the stability guard"),
+        (
+            "radau",
+            "Radau IIA of order 5 (RADAU5's method): L-stable, its error estimate blind to the \
+             stiff modes it damps; the step follows the motion, not the beam's highest element mode",
+        ),
+    ],
+};
+
 pub const ENERGY_CHECK_TYPE: EnumType = EnumType {
     name: "EnergyCheck",
     description: "What a step does when the energy balance breaks: the energy's change no longer \
@@ -106,6 +119,7 @@ pub const ENUM_TYPES: &[EnumType] = &[
     RANGE_CHECK_TYPE,
     BEAM_TYPE,
     ENERGY_CHECK_TYPE,
+    INTEGRATOR_TYPE,
 ];
 
 const fn real(unit: &'static str) -> Kind {
@@ -358,6 +372,13 @@ adaptive BDF",
             name: "stability_guard", kind: Kind::Bool, range: Finite, default: Bool(true),
             group: Solver, appears: flag(true, "--stability-guard"),
             description: "Cap the BDF order where an undamped mode would be amplified by BDF3-5",
+        }
+        Integrator {
+            field: solver.integrator,
+            name: "integrator", kind: Kind::Choice(&INTEGRATOR_TYPE), range: Finite,
+            default: Choice(0), group: Solver, appears: flag(true, "--integrator"),
+            description: "The integrator: bdf (variable order, the stability guard) or radau \
+(Radau IIA of order 5, L-stable: the step follows the motion, not the beam's highest mode)",
         }
         RangeCheck {
             field: range_check,

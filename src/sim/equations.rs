@@ -8,7 +8,7 @@ use super::theory::{self, vector, Build, Theory};
 use super::SimError;
 use crate::model::{BeamBody, Kinematics, PaperLaw, Phi, PhiPiece, Poly, RangeCheck};
 use crate::scene::{InitialState, PhiSource, Scene};
-use crate::solver::{Bdf, OdeSystem, RangeViolation};
+use crate::solver::{Bdf, OdeSystem, Radau, RangeViolation};
 use nalgebra::allocator::Allocator;
 use nalgebra::DefaultAllocator;
 use std::fmt::Debug;
@@ -95,6 +95,7 @@ impl Build for Boxed {
     where
         DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
         Bdf<T::D>: Send + Sync,
+        Radau<T::D>: Send + Sync,
     {
         Box::new(theory)
     }

@@ -7,7 +7,10 @@ use super::theory::{Build, Theory};
 use super::SimError;
 use crate::model::{Energy, EnergyBalance, Kinematics, PhiPiece, Power};
 use crate::scene::InitialState;
-use crate::solver::{Bdf, BdfConfig, OdeSystem, RangeViolation, SolverError, Stats, StepOutcome};
+use crate::solver::{
+    Bdf, BdfConfig, Integrator, Method, OdeSystem, Radau, RangeViolation, SolverError, Stats,
+    StepOutcome,
+};
 use crate::visit::StateVisitor;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, OVector};
@@ -74,12 +77,12 @@ pub(super) struct Stepping {
 
 /// A theory and the integrator of its state.
 #[derive(Clone, Debug)]
-pub(super) struct Stepper<T: Theory>
+pub(super) struct Stepper<T: Theory, I>
 where
     DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
 {
     theory: T,
-    bdf: Bdf<T::D>,
+    bdf: I,
 }
 
 /// Builds a [`Stepper`] from the start of the theory on `piece`.
@@ -97,19 +100,29 @@ impl Build for Start<'_> {
     where
         DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
         Bdf<T::D>: Send + Sync,
+        Radau<T::D>: Send + Sync,
     {
         let y0 = theory.start(self.piece, &self.init).map_err(SimError::Setting)?;
-        let mut bdf = Bdf::new(*self.config, self.t0, y0)?;
         // The layout the saved state has too: a run restored from it sets the same.
-        bdf.set_second_order(theory.layout());
-        Ok(Box::new(Stepper { theory, bdf }))
+        let layout = theory.layout();
+        Ok(match self.config.method {
+            Method::Bdf => {
+                let mut bdf = Bdf::new(*self.config, self.t0, y0)?;
+                bdf.set_second_order(layout);
+                Box::new(Stepper { theory, bdf })
+            }
+            Method::Radau => {
+                let mut bdf = Radau::new(*self.config, self.t0, y0)?;
+                bdf.set_second_order(layout);
+                Box::new(Stepper { theory, bdf })
+            }
+        })
     }
 }
 
-impl<T: Theory> Integration for Stepper<T>
+impl<T: Theory, I: Integrator<T::D> + Send + Sync + 'static> Integration for Stepper<T, I>
 where
     DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
-    Bdf<T::D>: Send + Sync,
 {
     fn clone_box(&self) -> Box<dyn Integration> {
         Box::new(self.clone())
@@ -132,7 +145,8 @@ where
     }
 
     fn restart(&mut self) -> Result<(), SolverError> {
-        self.bdf.reinit(self.bdf.t(), self.bdf.y().clone())
+        let (t, y) = (self.bdf.t(), self.bdf.y().clone());
+        self.bdf.reinit(t, y)
     }
 
     fn reaches_back_to(&self, t: f64) -> bool {
@@ -199,10 +213,10 @@ where
 /// After an accepted step of `bdf`: the powers at the step's Gauss points, from the dense
 /// output and its derivative ([`balance::GAUSS_2`]) in the buffers `buf`, and the energy
 /// `monitor`'s check when due.
-fn monitor_step<D: Dim, S: OdeSystem<D> + EnergyBalance<D>>(
+fn monitor_step<D: Dim, S: OdeSystem<D> + EnergyBalance<D>, I: Integrator<D>>(
     monitor: &mut Option<EnergyMonitor>,
     sys: &S,
-    bdf: &Bdf<D>,
+    bdf: &I,
     buf: &mut (OVector<f64, D>, OVector<f64, D>),
 ) -> Result<(), SimError>
 where
@@ -211,7 +225,7 @@ where
     let Some(m) = monitor.as_mut().filter(|m| m.active()) else {
         return Ok(());
     };
-    let (t, h) = (bdf.t(), bdf.last_step().1);
+    let (t, h) = (bdf.t(), bdf.last_h());
     let mut p = [Power::default(); 2];
     for (p, c) in p.iter_mut().zip(balance::GAUSS_2) {
         let ti = t - h + c * h;
@@ -230,8 +244,8 @@ where
 /// [`Bdf::advance`], whose first step, with `step.probe`, is a [`Bdf::probe_step`]: the
 /// integrator restarts at its time if the history did not survive a change of f there. After
 /// every accepted step the energy `monitor` checks the balance.
-fn advance_probing<D: Dim, S: OdeSystem<D> + EnergyBalance<D>>(
-    bdf: &mut Bdf<D>,
+fn advance_probing<D: Dim, S: OdeSystem<D> + EnergyBalance<D>, I: Integrator<D>>(
+    bdf: &mut I,
     sys: &S,
     (tout, tstop): (f64, f64),
     step: Stepping,
@@ -241,10 +255,11 @@ where
     DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
     let mut buf = (bdf.y().clone(), bdf.y().clone());
-    let mut after = |bdf: &Bdf<D>| monitor_step(monitor, sys, bdf, &mut buf);
+    let mut after = |bdf: &I| monitor_step(monitor, sys, bdf, &mut buf);
     if step.probe && bdf.t() < tout {
         if bdf.probe_step(sys, tstop)? == StepOutcome::Rejected {
-            bdf.reinit(bdf.t(), bdf.y().clone())?;
+            let (t, y) = (bdf.t(), bdf.y().clone());
+            bdf.reinit(t, y)?;
         } else {
             after(bdf)?;
             if step.single {

@@ -11,10 +11,31 @@ pub struct FixedStep {
     pub order: usize,
 }
 
+/// The integrator: the adaptive (or fixed-step) BDF, or Radau IIA of order 5.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    #[default]
+    Bdf,
+    Radau,
+}
+
+impl Method {
+    pub const ALL: [Method; 2] = [Method::Bdf, Method::Radau];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Bdf => "bdf",
+            Method::Radau => "radau",
+        }
+    }
+}
+
 /// Integrator settings: the one settings type of a run, with every default (the CLI's scene,
 /// the FMU's parameters and the benchmark fill it in).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BdfConfig {
+    /// The integrator. Default the BDF.
+    pub method: Method,
     /// Relative tolerance, in [`RTOL_RANGE`] ([`check_rtol`]). Default 1e-6.
     pub rtol: f64,
     /// Absolute tolerance for every state, > 0 (a zero would divide by |y| = 0). Default
@@ -41,6 +62,7 @@ pub struct BdfConfig {
 impl Default for BdfConfig {
     fn default() -> Self {
         Self {
+            method: Method::Bdf,
             rtol: 1e-6,
             atol: None,
             max_order: 5,

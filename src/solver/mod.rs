@@ -44,8 +44,10 @@ mod config;
 mod eigen;
 mod error;
 mod guard;
+mod integrator;
 mod lu;
 pub mod problems;
+mod radau;
 mod second_order;
 mod snapshot;
 mod stats;
@@ -53,13 +55,15 @@ mod system;
 
 pub use band::GenBand;
 pub use bdf::{Bdf, StepOutcome};
-pub use config::{check_rtol, BdfConfig, FixedStep, ORDER_RANGE, RTOL_RANGE};
+pub use config::{check_rtol, BdfConfig, FixedStep, Method, ORDER_RANGE, RTOL_RANGE};
 pub use error::{Allowed, SolverError};
 pub use guard::{unstable_band, A_STABILITY_ANGLE_DEG};
+pub use integrator::Integrator;
 /// The Newton matrix's LU, public only so that the benchmark can price a factorisation and a
 /// solve as the integrator does them (`cargo xtask bench`, costs.csv).
 #[doc(hidden)]
 pub use lu::Lu;
+pub use radau::Radau;
 pub use second_order::{BandRankOne, BandedParts, DenseParts, Layout, SecondOrder};
 pub use stats::Stats;
 pub use system::{OdeSystem, RangeViolation};

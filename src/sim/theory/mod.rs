@@ -16,7 +16,7 @@ pub use quadratic::Quadratic;
 use super::SimError;
 use crate::model::{BeamBody, BeamN, EnergyBalance, Kinematics, PhiPiece};
 use crate::scene::{InitialState, Scene};
-use crate::solver::{Bdf, Layout, OdeSystem};
+use crate::solver::{Bdf, Layout, OdeSystem, Radau};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, OVector};
 use std::fmt::Debug;
@@ -94,7 +94,8 @@ pub trait Build {
     fn build<T: Theory>(self, theory: T) -> Self::Out
     where
         DefaultAllocator: Allocator<T::D> + Allocator<T::D, T::D>,
-        Bdf<T::D>: Send + Sync;
+        Bdf<T::D>: Send + Sync,
+        Radau<T::D>: Send + Sync;
 }
 
 /// Builds the theory `scene` names, and only it, with the body `model`, and gives it to `b`.

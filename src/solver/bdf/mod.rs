@@ -501,25 +501,9 @@ where
         sys: &S,
         tout: f64,
         tstop: f64,
-        mut after: impl FnMut(&Self) -> Result<(), E>,
+        after: impl FnMut(&Self) -> Result<(), E>,
     ) -> Result<(), E> {
-        // A target behind t is fine while it lies in the last step (dense output serves it).
-        if !self.reaches_back_to(tout) {
-            return Err(SolverError::TimeBehind { t: self.t, target: tout }.into());
-        }
-        let mut taken = 0u64;
-        while self.t < tout {
-            if taken == self.cfg.max_steps {
-                return Err(SolverError::TooManySteps { t: self.t, max_steps: taken }.into());
-            }
-            let outcome = self.step(sys, tstop)?;
-            after(self)?;
-            if outcome == StepOutcome::ReachedStop && self.t < tout {
-                return Err(SolverError::TimeBehind { t: tstop, target: tout }.into());
-            }
-            taken += 1;
-        }
-        Ok(())
+        <Self as super::Integrator<D>>::advance_with(self, sys, tout, tstop, after)
     }
 
     /// Takes one step, never past `tstop`. A step whose end falls within round-off of `tstop`
