@@ -36,7 +36,7 @@ impl PhiSource {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolverSettings {
     pub rtol: f64,
-    /// 0: 1e-3·rtol.
+    /// 0: the integrator's default (`BdfConfig::atol`).
     pub atol: f64,
     pub max_order: usize,
     /// 0: the adaptive BDF.

@@ -9,6 +9,12 @@ use beam_body::solver::{Bdf, BdfConfig, Integrator, Method, OdeSystem, Radau, St
 use bytes::{read_into, to_bytes};
 use nalgebra::{SMatrix, SVector, Vector1, Vector3, U1, U3};
 
+/// The tolerance Radau's error test applies for a relative tolerance `rtol`, RADAU5's
+/// 0.1·rtol^(2/3): what the error is held to below.
+fn internal(rtol: f64) -> f64 {
+    0.1 * beam_body::math::pow(rtol, 2.0 / 3.0)
+}
+
 fn config(rtol: f64, atol: f64) -> BdfConfig {
     BdfConfig { method: Method::Radau, atol: Some(atol), ..BdfConfig::new(rtol) }
 }
@@ -38,7 +44,7 @@ fn the_steps_on_a_stiff_problem_follow_the_solution() {
         .unwrap();
         let st = *s.stats();
         eprintln!("rtol {rtol:e}: error {worst:.2e}, {st:?}");
-        assert!(worst < 10.0 * rtol, "rtol {rtol}: error {worst}");
+        assert!(worst < 10.0 * internal(rtol), "rtol {rtol}: error {worst}");
         assert!(st.steps < 300, "rtol {rtol}: {} steps", st.steps);
     }
 }
@@ -72,8 +78,8 @@ fn the_error_and_the_dense_output_follow_the_tolerance() {
         let st = *s.stats();
         eprintln!("rtol {rtol:e}: error {worst:.2e}, dense {dense:.2e}, {st:?}");
         // Over about three periods the global error is a few local ones.
-        assert!(worst < 30.0 * rtol, "rtol {rtol}: error {worst}");
-        assert!(dense < 30.0 * rtol, "rtol {rtol}: dense output error {dense}");
+        assert!(worst < 30.0 * internal(rtol), "rtol {rtol}: error {worst}");
+        assert!(dense < 30.0 * internal(rtol), "rtol {rtol}: dense output error {dense}");
         assert!(worst < last.0 && st.steps > last.1, "the error falls, the steps grow");
         last = (worst, st.steps);
     }
@@ -166,7 +172,7 @@ fn an_undamped_fast_mode_is_damped_not_resolved() {
     let (bdf_amp, _, bdf_steps) = run(Method::Bdf, 1e-9);
     assert!(amp < 1e-15, "Radau damps the fast mode: {amp}");
     assert!(bdf_amp > 1e-9, "the BDF keeps it (and lets it grow): {bdf_amp}");
-    assert!(slow < 1e-6, "the slow motion is right: {slow}");
+    assert!(slow < 10.0 * internal(1e-6), "the slow motion is right: {slow}");
     assert!(steps < 1000 && 100 * steps < bdf_steps, "Radau {steps} steps, BDF {bdf_steps}");
 }
 
@@ -246,4 +252,120 @@ fn an_analytic_jacobian_is_used_and_a_fixed_step_refused() {
     };
     let e = Radau::new(cfg, 0.0, SVector::<f64, 2>::new(1.0, 0.0)).unwrap_err().to_string();
     assert!(e.contains("fixed_step"), "{e}");
+}
+
+/// A double pendulum of point masses in its two angles: M(x)ẍ = F(x, ẋ), a mechanical system
+/// with a configuration-dependent mass matrix, given three ways: f alone, f and the
+/// structured Jacobian, and those with the residual R = Mẍ − F.
+#[derive(Clone, Copy)]
+struct Pendulum {
+    structured: bool,
+    residual: bool,
+}
+
+impl Pendulum {
+    fn mass(x: &[f64]) -> [[f64; 2]; 2] {
+        let c = cos(x[0] - x[1]);
+        [[2.0, c], [c, 1.0]]
+    }
+
+    /// R(x, ẋ, ẍ) = M ẍ − F with F of gravity (g = 9.81, unit lengths and masses).
+    fn res(x: &[f64], v: &[f64], a: &[f64], out: &mut [f64]) {
+        let m = Self::mass(x);
+        let s = sin(x[0] - x[1]);
+        let g = 9.81;
+        out[0] = m[0][0] * a[0] + m[0][1] * a[1] + s * v[1] * v[1] + 2.0 * g * sin(x[0]);
+        out[1] = m[1][0] * a[0] + m[1][1] * a[1] - s * v[0] * v[0] + g * sin(x[1]);
+    }
+}
+
+impl OdeSystem<nalgebra::Dyn> for Pendulum {
+    fn rhs(&self, _: f64, y: &nalgebra::DVector<f64>) -> nalgebra::DVector<f64> {
+        let (x, v) = y.as_slice().split_at(2);
+        let mut r = [0.0; 2];
+        Self::res(x, v, &[0.0; 2], &mut r);
+        let m = Self::mass(x);
+        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+        let a0 = (-r[0] * m[1][1] + r[1] * m[0][1]) / det;
+        let a1 = (-r[1] * m[0][0] + r[0] * m[1][0]) / det;
+        nalgebra::DVector::from_vec(vec![v[0], v[1], a0, a1])
+    }
+
+    fn second_order(
+        &self,
+        t: f64,
+        y: &nalgebra::DVector<f64>,
+    ) -> Option<beam_body::solver::SecondOrder> {
+        if !self.structured {
+            return None;
+        }
+        let f = self.rhs(t, y);
+        let acc = [f[2], f[3]];
+        let part = |offset: usize| {
+            nalgebra::DMatrix::from_fn(2, 2, |k, c| {
+                let mut yp = y.clone();
+                let step = 1e-7 * (1.0 + y[offset + c].abs());
+                yp[offset + c] += step;
+                let (mut r0, mut r1) = ([0.0; 2], [0.0; 2]);
+                Self::res(&y.as_slice()[..2], &y.as_slice()[2..], &acc, &mut r0);
+                Self::res(&yp.as_slice()[..2], &yp.as_slice()[2..], &acc, &mut r1);
+                (r1[k] - r0[k]) / step
+            })
+        };
+        let m = Self::mass(&y.as_slice()[..2]);
+        Some(beam_body::solver::SecondOrder::Dense(beam_body::solver::DenseParts {
+            mass: nalgebra::DMatrix::from_fn(2, 2, |i, j| m[i][j]),
+            damping: part(2),
+            stiffness: part(0),
+        }))
+    }
+
+    fn residual(&self, _: f64, x: &[f64], v: &[f64], a: &[f64], out: &mut [f64]) -> bool {
+        if self.residual {
+            Self::res(x, v, a, out);
+        }
+        self.residual
+    }
+}
+
+/// The stages solved through the residual give the collocation solution the first-order
+/// Newton gives, on a system whose mass matrix changes with the configuration: each way's
+/// error against a tight reference follows the tolerance, and the residual form calls f
+/// only once a step.
+#[test]
+fn the_residual_form_solves_the_same_collocation_system() {
+    let y0 = nalgebra::DVector::from_vec(vec![0.6, -0.2, 0.0, 0.0]);
+    let run = |sys: Pendulum, rtol: f64| {
+        let mut s = Radau::new(config(rtol, rtol), 0.0, y0.clone()).unwrap();
+        s.set_second_order(Some(beam_body::solver::Layout::Dense));
+        let done = |_: &Radau<nalgebra::Dyn>| Ok::<_, beam_body::solver::SolverError>(());
+        s.advance_with(&sys, 3.0, 3.0, done).unwrap();
+        (s.y().clone(), *s.stats())
+    };
+    let all = Pendulum { structured: true, residual: true };
+    let (reference, _) = run(Pendulum { structured: true, residual: false }, 1e-12);
+    for rtol in [1e-4, 1e-7] {
+        let mut errors = vec![];
+        for sys in [
+            Pendulum { structured: false, residual: false },
+            Pendulum { residual: false, ..all },
+            all,
+        ] {
+            let (y, st) = run(sys, rtol);
+            let e = (&y - &reference).amax();
+            eprintln!(
+                "rtol {rtol:e} structured {} residual {}: error {e:.1e}, {st:?}",
+                sys.structured, sys.residual
+            );
+            assert!(e < 30.0 * internal(rtol), "rtol {rtol}: error {e}");
+            errors.push((e, st));
+        }
+        // With the residual, Newton's iterations call R, and f once a step (its end).
+        let st = errors[2].1;
+        assert!(st.rhs_evals >= 3 * st.newton_iters && st.jac_evals > 0);
+        assert!(
+            errors.iter().all(|(e, _)| *e < 10.0 * errors[0].0.max(internal(rtol))),
+            "{errors:?}"
+        );
+    }
 }

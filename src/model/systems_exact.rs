@@ -134,6 +134,11 @@ impl OdeSystem<Dyn> for ExactSystem<'_> {
 
     /// The parts M, C = ∂R/∂q̇ and S = ∂R/∂q at the accelerations of y, dense: S and C by
     /// forward differences of the residual (O(n) each, so O(n²) in all).
+    fn residual(&self, t: f64, x: &[f64], v: &[f64], a: &[f64], out: &mut [f64]) -> bool {
+        self.model.residual(&self.phi.eval(t), x, v, a, out);
+        true
+    }
+
     fn second_order(&self, t: f64, y: &DVector<f64>) -> Option<SecondOrder> {
         let model = self.model;
         let nq = model.dofs();

@@ -346,7 +346,7 @@ fmi2SetupExperiment's)",
             name: "atol", kind: Kind::Real { unit: None }, range: NonNegative, default: Real(0.0),
             group: Solver, appears: study_key(true, "--atol"),
             description: "Absolute tolerance of the integrator for every state, in its SI unit; 0 \
-selects 1e-3 times the relative tolerance",
+selects 1e-3 times the relative tolerance (integrator = bdf) or the relative tolerance (radau)",
         }
         MaxOrder {
             field: solver.max_order,

@@ -39,7 +39,7 @@ pub struct BdfConfig {
     /// Relative tolerance, in [`RTOL_RANGE`] ([`check_rtol`]). Default 1e-6.
     pub rtol: f64,
     /// Absolute tolerance for every state, > 0 (a zero would divide by |y| = 0). Default
-    /// `None`: 1e-3·rtol.
+    /// `None`: [`atol`](Self::atol).
     pub atol: Option<f64>,
     /// Highest order used, 1..=5. Default 5.
     pub max_order: usize,
@@ -98,9 +98,16 @@ impl BdfConfig {
         Self { rtol, ..Self::default() }
     }
 
-    /// The absolute tolerance in use: `atol`, or 1e-3·rtol.
+    /// The absolute tolerance in use: `atol`, or by default 1e-3·rtol for the BDF and rtol
+    /// for Radau (docs/decisions.md, "Radau IIA"): Radau's error test damps what it does not
+    /// resolve, and a floor far below the motion's scale (the states are O(1) in SI units)
+    /// would make it resolve every element mode of amplitude above it.
     pub fn atol(&self) -> f64 {
-        self.atol.unwrap_or(1e-3 * self.rtol)
+        let factor = match self.method {
+            Method::Bdf => 1e-3,
+            Method::Radau => 1.0,
+        };
+        self.atol.unwrap_or(factor * self.rtol)
     }
 
     /// Checks every field against its allowed range.

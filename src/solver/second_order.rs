@@ -172,6 +172,20 @@ impl SecondOrder {
 }
 
 impl SecondOrderLu {
+    /// Solves (M + γC + γ²S) x = b in place (m entries): the reduced matrix itself.
+    pub fn solve_reduced(&self, b: &mut [f64]) {
+        match self {
+            SecondOrderLu::Banded(lu) => lu.solve_reduced(b),
+            SecondOrderLu::Dense { lu, .. } => {
+                let x = lu.solve(&DVector::from_column_slice(b));
+                match x {
+                    Some(x) => b.copy_from_slice(x.as_slice()),
+                    None => b.fill(f64::NAN),
+                }
+            }
+        }
+    }
+
     /// Solves (I − γJ)(dx, dẋ) = (r1, r2) in place, `r` = (r1, r2) of 2m entries, with the
     /// parts this was factored from.
     pub fn solve(&self, parts: &SecondOrder, r: &mut [f64]) {

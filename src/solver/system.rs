@@ -35,6 +35,16 @@ where
         None
     }
 
+    /// For a mechanical system y = (x, ẋ) of m coordinates (see
+    /// [`second_order`](Self::second_order)): the residual R(t, x, ẋ, ẍ) = M(x)ẍ − F(t, x, ẋ)
+    /// into `out`, for an integrator that solves its stages for the accelerations instead of
+    /// calling [`rhs`](Self::rhs) (Radau IIA): worth it where R costs less than ẍ = M⁻¹F (the
+    /// exact beam: O(n), where f needs the dense M and its Cholesky). Returns `false` (the
+    /// default) where the system does not give it.
+    fn residual(&self, _t: f64, _x: &[f64], _v: &[f64], _a: &[f64], _out: &mut [f64]) -> bool {
+        false
+    }
+
     /// Projection onto an invariant manifold (constraint stabilisation after each accepted
     /// step, the pattern of CVODE's `CVodeSetProjFn`). `None` (the default) means no
     /// projection. The projected point must be close to `y`: the difference is added to the

@@ -120,6 +120,35 @@ where
     }
 }
 
+impl<D: Dim> Factors<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    /// For a mechanical system's stages solved for the velocities (Radau's residual form):
+    /// (M + γC + γ²S) x = γ b with γ = h/μ, in place; `None` without the structured factors.
+    pub fn solve_reduced_real(&self, b: &mut [f64]) -> Option<()> {
+        let Factors::Second { h, real, .. } = self else { return None };
+        let (gr, _) = gammas(*h);
+        b.iter_mut().for_each(|x| *x *= gr);
+        real.solve_reduced(b);
+        Some(())
+    }
+
+    /// The same with γ = h/(α − iβ) for re + i·im, in place.
+    pub fn solve_reduced_complex(&self, re: &mut [f64], im: &mut [f64]) -> Option<()> {
+        let Factors::Second { h, complex, .. } = self else { return None };
+        let (_, gc) = gammas(*h);
+        let mut b: Vec<C64> =
+            re.iter().zip(im.iter()).map(|(r, i)| gc * C64::new(*r, *i)).collect();
+        complex.solve(&mut b);
+        for ((r, i), z) in re.iter_mut().zip(im.iter_mut()).zip(b) {
+            *r = z.re;
+            *i = z.im;
+        }
+        Some(())
+    }
+}
+
 /// M, C and S dense, whatever the layout.
 fn dense_parts(s: &SecondOrder) -> [DMatrix<f64>; 3] {
     match s {

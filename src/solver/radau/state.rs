@@ -22,7 +22,7 @@ where
     /// ×N; `h`; `hu`; `err_old`; `y_prev` ×N; `q` ×3N; `jac.kind` (count: 0 none, 1 dense,
     /// 2 structured); the dense Jacobian ×N² (column-major; zeros and discarded unless kind
     /// 1); with [`set_second_order`](Self::set_second_order) the structured parts (zeros and
-    /// discarded unless kind 2); `jac_current` (flag); `started` (flag); the [`Stats`]. The
+    /// discarded unless kind 2); `jac_current` (flag); `steps_at_jac` (count); `started` (flag); the [`Stats`]. The
     /// factorisations are not saved: they follow from the Jacobian and the step, bit for bit.
     pub(super) fn visit<V: StateVisitor + ?Sized>(&mut self, v: &mut V) {
         v.real("t", &mut self.t);
@@ -77,6 +77,7 @@ where
         };
         self.factors = None;
         v.flag("jac_current", &mut self.jac_current);
+        v.count("steps_at_jac", &mut self.steps_at_jac);
         v.flag("started", &mut self.started);
         self.stats.visit(v);
     }
@@ -100,6 +101,7 @@ where
             Some(Jacobian::Second(s)) => require(s.is_finite(), "structure")?,
             None => {}
         }
+        require(self.steps_at_jac <= self.stats.steps, "steps_at_jac")?;
         self.stats.check()
     }
 }

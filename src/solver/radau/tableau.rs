@@ -43,6 +43,26 @@ pub(super) const P: [[f64; 3]; 3] = [
     [0.3333333333333333, -2.6666666666666665, 3.3333333333333335],
 ];
 
+/// The Butcher matrix A and its inverse, as T Λ⁻¹ T⁻¹ and T Λ T⁻¹ from the constants above
+/// (so that they agree with the transformation to round-off).
+pub(super) fn butcher_and_inverse() -> ([[f64; 3]; 3], [[f64; 3]; 3]) {
+    let d = MU_ALPHA * MU_ALPHA + MU_BETA * MU_BETA;
+    let lam = [[MU_REAL, 0.0, 0.0], [0.0, MU_ALPHA, MU_BETA], [0.0, -MU_BETA, MU_ALPHA]];
+    let inv = [
+        [1.0 / MU_REAL, 0.0, 0.0],
+        [0.0, MU_ALPHA / d, -MU_BETA / d],
+        [0.0, MU_BETA / d, MU_ALPHA / d],
+    ];
+    let similar = |l: &[[f64; 3]; 3]| {
+        std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                (0..3).map(|k| (0..3).map(|m| T[i][k] * l[k][m] * TI[m][j]).sum::<f64>()).sum()
+            })
+        })
+    };
+    (similar(&inv), similar(&lam))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,6 +89,11 @@ mod tests {
         for (i, c) in C.iter().enumerate() {
             assert!((a.row(i).sum() - c).abs() < 1e-15);
         }
+        let (a2, ai) = butcher_and_inverse();
+        assert!(
+            (m(a2) - a).abs().max() < 1e-14
+                && (m(ai) * a - Matrix3::identity()).abs().max() < 1e-13
+        );
         let d = m(TI) * a.try_inverse().unwrap() * m(T);
         let want = m([[MU_REAL, 0.0, 0.0], [0.0, MU_ALPHA, MU_BETA], [0.0, -MU_BETA, MU_ALPHA]]);
         assert!((d - want).abs().max() < 1e-12, "{d}");

@@ -1,0 +1,119 @@
+//! The collocation system of a mechanical system y = (x, ẋ), M(x)ẍ = F(t, x, ẋ), solved for
+//! the stages' velocities through its residual R = Mẍ − F ([`OdeSystem::residual`]) instead
+//! of f = (ẋ, M⁻¹F): the exact beam's R costs O(n) where f needs its dense M and a
+//! Cholesky.
+//!
+//! With V_i = ẋ_n + Zv_i the stage velocities, the positions and accelerations follow
+//! linearly: X_i = x_n + c_i h ẋ_n + h Σ_j a_ij Zv_j and Ẍ_i = Σ_j (A⁻¹)_ij Zv_j / h, and the
+//! stages solve R(X_i, V_i, Ẍ_i) = 0. Simplified Newton at the Jacobian's point, with
+//! δX = hA δV and δẌ = A⁻¹δV/h, has the matrix A⁻¹/h ⊗ M + I ⊗ C + hA ⊗ S; in W = T⁻¹Zv it
+//! splits like the first-order one, into (M + γC + γ²S) for γ = h/μ and for
+//! γ = h/(α − iβ): the same m×m factorisations (linear.rs). The solution is the first-order
+//! collocation's (the same equations, eliminated differently), so the error estimate and
+//! the dense output are unchanged.
+
+use super::linear::Jacobian;
+use super::tableau::{butcher_and_inverse, C, T, TI};
+use super::*;
+
+type Stage = Vec<f64>;
+
+impl<D: Dim> Radau<D>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    /// [`collocate`](Self::collocate) by the residual, where the system gives one and the
+    /// Jacobian is structured; `None` otherwise.
+    pub(super) fn collocate_mechanical<S: OdeSystem<D>>(
+        &mut self,
+        sys: &S,
+        h: f64,
+        z: &mut Stages<D>,
+    ) -> Option<Result<(usize, f64), NewtonFail>> {
+        if !self.residual_form || !matches!(self.jac, Some(Jacobian::Second(_))) {
+            return None;
+        }
+        let factors = self.factors.as_ref()?;
+        let m = self.y.len() / 2;
+        let (x0, v0) = self.y.as_slice().split_at(m);
+        let (a, ai) = butcher_and_inverse();
+        let weights = self.scale(&self.y);
+        let wv = &weights.as_slice()[m..];
+        let r = self.internal_tolerance().0;
+        // A tenth of the first-order form's (collocate): here Newton's contraction follows the
+        // change of M since the Jacobian, not h·ΔJ, and stops further from the solution (the
+        // exact beam in 8 elements at rtol 1e-3: v1 6.4e-4 of its peak off with the same
+        // tolerance, 3.9e-4 with a tenth, at the same cost).
+        let tol = 0.1 * (10.0 * f64::EPSILON / r).max(0.03f64.min(r.sqrt()));
+        let mix = |c: &[[f64; 3]; 3], s: &[Stage; 3]| -> [Stage; 3] {
+            std::array::from_fn(|i| {
+                (0..m).map(|k| c[i][0] * s[0][k] + c[i][1] * s[1][k] + c[i][2] * s[2][k]).collect()
+            })
+        };
+        let mut zv: [Stage; 3] = std::array::from_fn(|i| z[i].as_slice()[m..].to_vec());
+        let mut w = mix(&TI, &zv);
+        let (mut x, mut v, mut acc, mut res) =
+            (vec![0.0; m], vec![0.0; m], vec![0.0; m], [vec![0.0; m], vec![0.0; m], vec![0.0; m]]);
+        let (mut old_norm, mut rate) = (0.0, 1.0);
+        let mut result = Err(NewtonFail::Diverged);
+        for k in 0..NEWTON_MAXITER {
+            for i in 0..3 {
+                for c in 0..m {
+                    let s = a[i][0] * zv[0][c] + a[i][1] * zv[1][c] + a[i][2] * zv[2][c];
+                    x[c] = x0[c] + C[i] * h * v0[c] + h * s;
+                    v[c] = v0[c] + zv[i][c];
+                    acc[c] = (ai[i][0] * zv[0][c] + ai[i][1] * zv[1][c] + ai[i][2] * zv[2][c]) / h;
+                }
+                if !sys.residual(self.t + C[i] * h, &x, &v, &acc, &mut res[i]) {
+                    self.residual_form = false;
+                    return None;
+                }
+                res[i].iter_mut().for_each(|r| *r = -*r);
+            }
+            self.stats.rhs_evals += 3;
+            self.stats.newton_iters += 1;
+            if !res.iter().all(|r| r.iter().all(|x| x.is_finite())) {
+                result = Err(NewtonFail::NonFinite);
+                break;
+            }
+            let [mut d0, mut d1, mut d2] = mix(&TI, &res);
+            factors.solve_reduced_real(&mut d0)?;
+            factors.solve_reduced_complex(&mut d1, &mut d2)?;
+            let n = ([&d0, &d1, &d2]
+                .iter()
+                .flat_map(|d| d.iter().zip(wv).map(|(x, w)| (x / w) * (x / w)))
+                .sum::<f64>()
+                / (3 * m).max(1) as f64)
+                .sqrt();
+            if !n.is_finite() {
+                result = Err(NewtonFail::NonFinite);
+                break;
+            }
+            if k > 0 {
+                rate = n / old_norm;
+                if rate >= 1.0 || pow(rate, (NEWTON_MAXITER - k) as f64) / (1.0 - rate) * n > tol {
+                    break;
+                }
+            }
+            for (w, d) in w.iter_mut().zip([&d0, &d1, &d2]) {
+                w.iter_mut().zip(d).for_each(|(w, d)| *w += d);
+            }
+            zv = mix(&T, &w);
+            if n == 0.0 || (k > 0 && rate / (1.0 - rate) * n < tol) {
+                result = Ok((k + 1, rate));
+                break;
+            }
+            old_norm = n;
+        }
+        // The first-order stages: Zx_i = c_i h ẋ_n + h Σ_j a_ij Zv_j.
+        for (i, zi) in z.iter_mut().enumerate() {
+            let s = zi.as_mut_slice();
+            for c in 0..m {
+                s[c] = C[i] * h * v0[c]
+                    + h * (a[i][0] * zv[0][c] + a[i][1] * zv[1][c] + a[i][2] * zv[2][c]);
+                s[m + c] = zv[i][c];
+            }
+        }
+        Some(result)
+    }
+}
