@@ -54,7 +54,8 @@ where
         let mut w = mix(&TI, &zv);
         let (mut x, mut v, mut acc, mut res) =
             (vec![0.0; m], vec![0.0; m], vec![0.0; m], [vec![0.0; m], vec![0.0; m], vec![0.0; m]]);
-        let (mut old_norm, mut rate) = (0.0, 1.0);
+        let mut old_norm = 0.0;
+        let mut rate;
         let mut result = Err(NewtonFail::Diverged);
         for k in 0..NEWTON_MAXITER {
             for i in 0..3 {
@@ -85,21 +86,21 @@ where
                 .sum::<f64>()
                 / (3 * m).max(1) as f64)
                 .sqrt();
-            if !n.is_finite() {
-                result = Err(NewtonFail::NonFinite);
-                break;
-            }
-            if k > 0 {
-                rate = n / old_norm;
-                if rate >= 1.0 || pow(rate, (NEWTON_MAXITER - k) as f64) / (1.0 - rate) * n > tol {
+            let converged = match Newton::judge(k, n, old_norm, tol) {
+                Newton::Fails(why) => {
+                    result = Err(why);
                     break;
                 }
-            }
+                Newton::Converges(r, done) => {
+                    rate = r;
+                    done
+                }
+            };
             for (w, d) in w.iter_mut().zip([&d0, &d1, &d2]) {
                 w.iter_mut().zip(d).for_each(|(w, d)| *w += d);
             }
             zv = mix(&T, &w);
-            if n == 0.0 || (k > 0 && rate / (1.0 - rate) * n < tol) {
+            if converged {
                 result = Ok((k + 1, rate));
                 break;
             }

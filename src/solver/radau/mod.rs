@@ -65,6 +65,31 @@ enum NewtonFail {
     NonFinite,
 }
 
+/// The verdict on a Newton iteration after its increment of norm `n` (iteration k, the last
+/// increment's norm `old`): it fails (diverging, or too slow to reach `tol` in the
+/// iterations left), or goes on at its contraction rate, converged or not (Hairer & Wanner
+/// IV.8, (8.10)–(8.11)).
+enum Newton {
+    Fails(NewtonFail),
+    Converges(f64, bool),
+}
+
+impl Newton {
+    fn judge(k: usize, n: f64, old: f64, tol: f64) -> Newton {
+        if !n.is_finite() {
+            return Newton::Fails(NewtonFail::NonFinite);
+        }
+        if k == 0 {
+            return Newton::Converges(1.0, n == 0.0);
+        }
+        let rate = n / old;
+        if rate >= 1.0 || pow(rate, (NEWTON_MAXITER - k) as f64) / (1.0 - rate) * n > tol {
+            return Newton::Fails(NewtonFail::Diverged);
+        }
+        Newton::Converges(rate, n == 0.0 || rate / (1.0 - rate) * n < tol)
+    }
+}
+
 /// The Radau IIA(5) integrator of `y' = f(t, y)` in dimension `D`.
 #[derive(Clone, Debug)]
 pub struct Radau<D: Dim>
@@ -319,7 +344,7 @@ where
         let mut w = mix(&TI, z);
         let (mu_r, mu_a, mu_b) = (MU_REAL / h, tableau::MU_ALPHA / h, tableau::MU_BETA / h);
         let mut old_norm = 0.0;
-        let mut rate = 1.0;
+        let mut rate;
         let mut evals = 0;
         let mut result = Err(NewtonFail::Diverged);
         for k in 0..NEWTON_MAXITER {
@@ -342,21 +367,21 @@ where
             let n =
                 [&d0, &d1, &d2].map(|d| rms(d, &w_scale)).iter().map(|r| r * r).sum::<f64>().sqrt()
                     / 3f64.sqrt();
-            if !n.is_finite() {
-                result = Err(NewtonFail::NonFinite);
-                break;
-            }
-            if k > 0 {
-                rate = n / old_norm;
-                if rate >= 1.0 || pow(rate, (NEWTON_MAXITER - k) as f64) / (1.0 - rate) * n > tol {
+            let converged = match Newton::judge(k, n, old_norm, tol) {
+                Newton::Fails(why) => {
+                    result = Err(why);
                     break;
                 }
-            }
+                Newton::Converges(r, done) => {
+                    rate = r;
+                    done
+                }
+            };
             w[0] += d0;
             w[1] += d1;
             w[2] += d2;
             *z = mix(&T, &w);
-            if n == 0.0 || (k > 0 && rate / (1.0 - rate) * n < tol) {
+            if converged {
                 result = Ok((k + 1, rate));
                 break;
             }
