@@ -21,11 +21,16 @@ from fmu_util import OUTPUTS, PHI_SOURCE_LAW, T_END, Slave
 H = 0.01  # communication step: t = 3 and t = 5 are communication points
 K3, K5 = 300, 500
 MODES = ("law", "values", "derivatives")
+# The integrators (integrator: 1 = bdf, 2 = radau), each on the beam it is for: the paper's model
+# with the BDF; Radau on the exact beam in 2 elements (beam: 2 = exact), whose state holds the
+# structured Jacobian.
+INTEGRATORS = {"bdf": {}, "radau": {"integrator": 2, "beam": 2, "n_elements": 2}}
 
 
-def make(fmu_unzipdir, md, mode, name="a", reals=None, tolerance=1e-6):
+def make(fmu_unzipdir, md, mode, name="a", reals=None, tolerance=1e-6, integrator="bdf"):
     s = Slave(fmu_unzipdir, md, name=name)
     integers = {"phi_source": PHI_SOURCE_LAW} if mode == "law" else {}
+    integers.update(INTEGRATORS[integrator])
     return s.start(tolerance=tolerance, start_time=0.0, stop_time=T_END, integers=integers, reals=reals, phi0=0.0)
 
 
@@ -71,14 +76,15 @@ def assert_same(a, b, what):
         )
 
 
+@pytest.mark.parametrize("integrator", INTEGRATORS)
 @pytest.mark.parametrize("mode", MODES)
-def test_get_set_state_rollback(fmu_unzipdir, fmu_model_description, fmu_report, mode):
+def test_get_set_state_rollback(fmu_unzipdir, fmu_model_description, fmu_report, mode, integrator):
     """Run to t = 3, getFMUstate, run to 5 (recording), setFMUstate, run to 5 again: identical. Then
     restore, run 3 -> 5 with another input, restore again and rerun the original: identical again.
     An uninterrupted run 0 -> 5 gives the same outputs too (getFMUstate has no side effect)."""
     md = fmu_model_description
-    straight = make(fmu_unzipdir, md, mode, name="straight")
-    s = make(fmu_unzipdir, md, mode, name="rollback")
+    straight = make(fmu_unzipdir, md, mode, name="straight", integrator=integrator)
+    s = make(fmu_unzipdir, md, mode, name="rollback", integrator=integrator)
     try:
         y_straight = run(straight, mode, 0, K5)
         run(s, mode, 0, K3)
@@ -98,25 +104,26 @@ def test_get_set_state_rollback(fmu_unzipdir, fmu_model_description, fmu_report,
         if mode != "law":
             assert not np.array_equal(y_other, y1), f"{mode}: the shifted input changed nothing"
         assert not s.errors() and not straight.errors(), s.errors() + straight.errors()
-        fmu_report.figure(f"state {mode}", "rollback_max|diff|", float(np.max(np.abs(y1 - y3))))
+        fmu_report.figure(f"state {mode} {integrator}", "rollback_max|diff|", float(np.max(np.abs(y1 - y3))))
     finally:
         s.free()
         straight.free()
 
 
+@pytest.mark.parametrize("integrator", INTEGRATORS)
 @pytest.mark.parametrize("mode", MODES)
-def test_serialized_state_continues_in_a_new_instance(fmu_unzipdir, fmu_model_description, fmu_report, mode):
+def test_serialized_state_continues_in_a_new_instance(fmu_unzipdir, fmu_model_description, fmu_report, mode, integrator):
     """serializeFMUstate at t = 3, deSerializeFMUstate + setFMUstate in a NEW instance (another
     instanceName, only instantiated), then both step 200 times: identical at every step."""
     md = fmu_model_description
-    a = make(fmu_unzipdir, md, mode, name="original")
+    a = make(fmu_unzipdir, md, mode, name="original", integrator=integrator)
     b = Slave(fmu_unzipdir, md, name="restored")  # instantiated only
     try:
         run(a, mode, 0, K3)
         state = a.fmu.getFMUstate()
         data = a.fmu.serializeFMUstate(state)
         a.fmu.freeFMUstate(state)
-        fmu_report.figure(f"state {mode}", "serialized_bytes", len(data))
+        fmu_report.figure(f"state {mode} {integrator}", "serialized_bytes", len(data))
         assert isinstance(data, bytes) and len(data) > 0
         state_b = b.fmu.deSerializeFMUstate(data)
         b.fmu.setFMUstate(state_b)
