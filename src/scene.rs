@@ -44,12 +44,41 @@ pub struct SolverSettings {
     /// 0: order 2 (with `fixed_step`).
     pub fixed_order: usize,
     pub stability_guard: bool,
-    pub integrator: Method,
+    pub integrator: IntegratorChoice,
+}
+
+/// The `integrator` setting: a method, or `auto`, the one that wins on the scene's beam
+/// (docs/decisions.md, "Radau IIA"): Radau IIA for the exact beam, whose element modes set
+/// the BDF's step; the BDF for the paper's theories, where it takes fewer, cheaper steps, and
+/// for the paper's constant-step mode, which is the BDF's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IntegratorChoice {
+    #[default]
+    Auto,
+    Bdf,
+    Radau,
+}
+
+impl IntegratorChoice {
+    /// In the order of the enumeration's items.
+    pub const ALL: [IntegratorChoice; 3] =
+        [IntegratorChoice::Auto, IntegratorChoice::Bdf, IntegratorChoice::Radau];
+
+    /// The method a run of `beam` uses; `fixed`: the constant-step mode.
+    pub fn method(self, beam: BeamModel, fixed: bool) -> Method {
+        match self {
+            IntegratorChoice::Bdf => Method::Bdf,
+            IntegratorChoice::Radau => Method::Radau,
+            IntegratorChoice::Auto if fixed || beam == BeamModel::Quadratic => Method::Bdf,
+            IntegratorChoice::Auto => Method::Radau,
+        }
+    }
 }
 
 impl SolverSettings {
-    /// The integrator's configuration, with at most `max_steps` steps per call.
-    pub fn config(&self, max_steps: u64) -> BdfConfig {
+    /// The integrator's configuration for a run of `beam`, with at most `max_steps` steps per
+    /// call.
+    pub fn config(&self, beam: BeamModel, max_steps: u64) -> BdfConfig {
         let order = if self.fixed_order == 0 { 2 } else { self.fixed_order };
         BdfConfig {
             rtol: self.rtol,
@@ -57,15 +86,15 @@ impl SolverSettings {
             max_order: self.max_order,
             fixed_step: (self.fixed_step > 0.0).then_some(FixedStep { h: self.fixed_step, order }),
             stability_guard: self.stability_guard,
-            method: self.integrator,
+            method: self.integrator.method(beam, self.fixed_step > 0.0),
             max_steps,
             ..BdfConfig::default()
         }
     }
 
-    /// The absolute tolerance in use.
-    pub fn atol(&self) -> f64 {
-        self.config(1).atol()
+    /// The absolute tolerance in use for a run of `beam`.
+    pub fn atol(&self, beam: BeamModel) -> f64 {
+        self.config(beam, 1).atol()
     }
 }
 
@@ -134,7 +163,7 @@ impl Default for Scene {
     }
 }
 
-crate::settings::choice_field!(PhiSource);
+crate::settings::choice_field!(PhiSource, IntegratorChoice);
 
 /// The scene's `get` and `put` from the declaration of the settings: each key reads and writes
 /// its field.
@@ -219,7 +248,7 @@ impl Scene {
 
     /// The integrator's configuration for a run of this scene.
     pub fn solver_config(&self, max_steps: u64) -> BdfConfig {
-        self.solver.config(max_steps)
+        self.solver.config(self.params.beam, max_steps)
     }
 
     /// φ at t = 0 under the settings (the law's φ0 + its value there, or the host's start).
@@ -369,7 +398,7 @@ mod tests {
         }
         assert_eq!(s.params, Params::default());
         assert_eq!(s.law, PaperLaw::default());
-        assert_eq!(s.solver.config(10_000_000), BdfConfig::default());
+        assert_eq!(s.solver.config(s.params.beam, 10_000_000), BdfConfig::default());
     }
 
     #[test]

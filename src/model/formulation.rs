@@ -125,4 +125,4 @@ pub(crate) fn by_name<T: Copy>(
     })
 }
 
-crate::settings::choice_field!(Formulation, BeamModel, RangeCheck, crate::solver::Method);
+crate::settings::choice_field!(Formulation, BeamModel, RangeCheck);

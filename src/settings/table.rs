@@ -57,6 +57,10 @@ pub const INTEGRATOR_TYPE: EnumType = EnumType {
     name: "Integrator",
     description: "The integrator inside the model",
     items: &[
+        (
+            "auto",
+            "radau for the exact beam, bdf for the paper's theories and the constant-step mode",
+        ),
         ("bdf", "variable-order BDF (CVODE's method), orders 1 to max_order, with the stability guard"),
         (
             "radau",
@@ -377,8 +381,9 @@ adaptive BDF",
             field: solver.integrator,
             name: "integrator", kind: Kind::Choice(&INTEGRATOR_TYPE), range: Finite,
             default: Choice(0), group: Solver, appears: flag(true, "--integrator"),
-            description: "The integrator: bdf (variable order, the stability guard) or radau \
-(Radau IIA of order 5, L-stable: the step follows the motion, not the beam's highest mode)",
+            description: "The integrator: auto (radau for the exact beam, bdf otherwise), bdf \
+(variable order, the stability guard) or radau (Radau IIA of order 5, L-stable: the step \
+follows the motion, not the beam's highest mode)",
         }
         RangeCheck {
             field: range_check,

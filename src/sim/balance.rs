@@ -86,8 +86,9 @@ impl fmt::Display for Unstable {
              {:+.4e} J; the difference may be at most {:.3e} J at this tolerance): the \
              integrator's error is not under control (an unstable integration, or a tolerance too \
              loose for this run), and the trajectory cannot be trusted. Ways out: a tighter rtol, \
-             max_order = 2 (BDF2 damps the modes it does not resolve), or damping of the beam \
-             (damping_ratio = 0.01); energy_check = warn keeps the run going",
+             integrator = radau (L-stable: it damps the modes it does not resolve), max_order = \
+             2 (BDF2 does too), or damping of the beam (damping_ratio = 0.01); energy_check = \
+             warn keeps the run going",
             self.t, self.change, self.accounted, self.bound
         )
     }

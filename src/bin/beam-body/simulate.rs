@@ -7,6 +7,7 @@ use crate::{interrupt, note, CmdResult, Failure};
 use beam_body::csv;
 use beam_body::model::Outputs;
 use beam_body::sim::{self, simulate_partial, SimError};
+use beam_body::solver::Method;
 use std::ffi::OsString;
 use std::io::Write;
 use std::ops::ControlFlow;
@@ -135,13 +136,16 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
         let order = if s.fixed_order == 0 { 2 } else { s.fixed_order };
         format!("fixed step h = {:e} s, order {order}", s.fixed_step)
     } else {
-        format!(
-            "rtol {:e}, atol {:e}, max order {}, guard {}",
-            s.rtol,
-            s.atol(),
-            s.max_order,
-            if s.stability_guard { "on" } else { "off" }
-        )
+        let config = scene.solver_config(1);
+        let method = match config.method {
+            Method::Bdf => format!(
+                "bdf, max order {}, guard {}",
+                s.max_order,
+                if s.stability_guard { "on" } else { "off" }
+            ),
+            Method::Radau => "radau".to_string(),
+        };
+        format!("{method}, rtol {:e}, atol {:e}", s.rtol, config.atol())
     };
     note(format_args!("beam-body: {}, {mode}", scene.describe()));
     note(format_args!(
