@@ -33,6 +33,7 @@ fn main() -> ExitCode {
     let result = match command {
         "bench" => Mode::parse(command, options).and_then(bench::run),
         "bench-elements" => Mode::parse(command, options).and_then(bench::elements::run),
+        "bench-exact" => Mode::parse(command, options).and_then(bench::exact::run),
         "bench-elements-run" => {
             Mode::parse(command, options).and_then(bench::elements::run_measure)
         }

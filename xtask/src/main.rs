@@ -72,6 +72,14 @@ Commands:
           side, the error against ours at rtol 1e-12; rtol 1e-4..1e-10 (3 tolerances with
           --quick), 5 rounds (3), medians; target/bench/elements.md, and
           docs/work_precision_elements.md in the full run.
+  bench-exact [--quick]
+          The exact beam at the paper's price: the undamped paper scene, the exact beam in
+          n = 2, 8, 32 elements (2, 8 with --quick) with Radau IIA at rtol 1e-2..1e-8 (3
+          tolerances), and with the BDF where it is affordable, beside the paper's model
+          at the same rtol; integration error against the same n at a tight rtol, error
+          against the largest n (the beam), the energy the integrator takes out, the
+          issue-46 goals with their verdicts; 3 rounds (2), medians;
+          target/bench/exact.md, and docs/work_precision_exact.md in the full run.
   bench-run --round K
           One round of the benchmark's Rust cases (used by `bench`, in a release build
           with --features bench): run the cases of target/bench/cases.csv in an order
@@ -188,7 +196,7 @@ fn run(args: &[String]) -> Result {
         "study" => study::run(options),
         "model-error" => study::model_error(options),
         // The benchmarks and experiments live in their own crate (bench/); these run it.
-        "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-elements"
+        "bench" | "bench-run" | "bench-ab" | "bench-dostep" | "bench-elements" | "bench-exact"
         | "bench-elements-run" | "bench-study" | "sweep" | "sweep-case" | "figures" | "profile" => {
             xtask::bench(command, options)
         }

@@ -28,14 +28,13 @@
 //! error compares our time with CVODE's interpolated (log–log) at our error.
 
 use std::fmt::Write as _;
-use std::fs;
 use std::time::Instant;
 
 use beam_body::model::Formulation;
 
 use super::problem::{on_grid, read_scene, Outcome, Problem};
 use super::{cvode, ours, shuffle};
-use crate::{cargo, project_root, relative, run_cmd, target_dir, write_text, Mode, Result};
+use crate::{cargo, project_root, run_cmd, Mode, Result};
 
 /// The solvers compared: ours as the CLI runs it, and without its stability guard (the dense
 /// eigenvalues of the 32×32 Jacobian; on this damped scene its steps differ by a few per cent),
@@ -218,15 +217,7 @@ pub fn run_measure(mode: Mode) -> Result {
         }
     }
     let md = report(&points, disagreement, mode, started.elapsed().as_secs_f64());
-    let out = target_dir().join("bench").join("elements.md");
-    write_text(&out, &md)?;
-    println!("{md}");
-    eprintln!("wrote {}", relative(&out));
-    if mode == Mode::Full {
-        let docs = project_root().join("docs").join("work_precision_elements.md");
-        fs::copy(&out, &docs).map_err(|e| format!("cannot copy to {}: {e}", relative(&docs)))?;
-        eprintln!("copied to {}", relative(&docs));
-    }
+    super::write_report(&md, "elements.md", "work_precision_elements.md", mode)?;
     Ok(())
 }
 

@@ -30,6 +30,7 @@ mod cvode;
 mod diffsol;
 mod dostep;
 pub mod elements;
+pub mod exact;
 pub mod fmu;
 mod me;
 mod ours;
@@ -672,6 +673,23 @@ fn write_solution(path: &Path, problem: &Problem, outcome: &Outcome) -> Result {
         text.push('\n');
     }
     write_text(path, &text)
+}
+
+/// Writes a benchmark's report `md` to target/bench/`name` and prints it; a full run (`mode`)
+/// copies it to docs/`docs_name`.
+fn write_report(md: &str, name: &str, docs_name: &str, mode: Mode) -> Result {
+    let dir = target_dir().join("bench");
+    fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", relative(&dir)))?;
+    let out = dir.join(name);
+    write_text(&out, md)?;
+    println!("{md}");
+    eprintln!("wrote {}", relative(&out));
+    if mode == Mode::Full {
+        let docs = project_root().join("docs").join(docs_name);
+        fs::copy(&out, &docs).map_err(|e| format!("cannot copy to {}: {e}", relative(&docs)))?;
+        eprintln!("copied to {}", relative(&docs));
+    }
+    Ok(())
 }
 
 /// Fisher–Yates with SplitMix64 seeded by the round: a different, reproducible order in every

@@ -3,6 +3,7 @@
 //! the driver of the CLI: it lands on the law's breakpoint t_rot and restarts there.
 
 use beam_body::model::Sample;
+use beam_body::scene::IntegratorChoice;
 use beam_body::sim::{Run, Scene};
 use beam_body::solver::{BdfConfig, Stats};
 
@@ -22,10 +23,20 @@ pub const FIXED_NEWTON_RTOL: f64 = 1e-10;
 
 /// Our adaptive BDF at `rtol`, atol = 1e-3·rtol (the default rule).
 pub fn bdf(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
+    with_integrator(problem, IntegratorChoice::Bdf, rtol)
+}
+
+/// Our adaptive `integrator` at `rtol` with its default atol (`BdfConfig::atol`).
+pub fn with_integrator(
+    problem: &Problem,
+    integrator: IntegratorChoice,
+    rtol: f64,
+) -> Result<Outcome, String> {
     let mut scene = problem.scene.clone();
     scene.solver.rtol = rtol;
     scene.solver.atol = 0.0;
     scene.solver.fixed_step = 0.0;
+    scene.solver.integrator = integrator;
     solve(problem, &scene)
 }
 

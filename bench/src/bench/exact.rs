@@ -1,0 +1,519 @@
+//! `cargo xtask bench-exact [--quick]`: the exact beam at the paper's price (issue 46). The
+//! undamped paper scene (scenes/paper.toml, reduced, 10.2 s) with the geometrically exact beam
+//! in n elements, each integrator, against the paper's model (the quadratic beam in one
+//! element, 2 coordinates, BDF) at the same rtol, all in one run.
+//!
+//! Two errors, never mixed (the developers' guide): the **integration error** of a case is
+//! against the same n at a tight tolerance (one reference per n, shared by every integrator);
+//! the **error against the beam** is against the largest n at its tight tolerance (the
+//! converged exact beam: model and integration error together). Both are the largest
+//! difference over the 0.01 s grid and the whole run, over the reference's largest |value|
+//! (v1, ϑ1; M and M_root for the hinge's and the root's moments, which carry the element modes'
+//! accelerations). The energy a case loses (a filtered integrator damps what it does not
+//! resolve): its energy at t_end against its reference's; after the turn the undamped model
+//! conserves it.
+//!
+//! Timing: one untimed run of each case (its outputs and counters), then R rounds (3; 2 with
+//! `--quick`) of every case in a shuffled order, each recording the tip's states on the grid
+//! (`ours`, as the benchmark's other solvers); the median per case.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use beam_body::model::{BeamModel, Formulation, Outputs, Sample};
+use beam_body::scene::IntegratorChoice;
+use beam_body::sim::{Run, Scene};
+use beam_body::solver::{BdfConfig, Stats};
+
+use super::problem::{on_grid, read_scene, Problem};
+use super::{ours, shuffle};
+use crate::{project_root, Mode, Result};
+
+/// One case: the paper's model (`elements` 0) or the exact beam in `elements`, one integrator,
+/// one rtol.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Case {
+    elements: usize,
+    integrator: IntegratorChoice,
+    rtol: f64,
+}
+
+impl Case {
+    fn label(&self) -> String {
+        match self.elements {
+            0 => "the paper's model (bdf)".to_string(),
+            n => format!("exact, {n} ({})", integrator_name(self.integrator)),
+        }
+    }
+}
+
+fn integrator_name(i: IntegratorChoice) -> &'static str {
+    match i {
+        IntegratorChoice::Auto => "auto",
+        IntegratorChoice::Bdf => "bdf",
+        IntegratorChoice::Radau => "radau",
+    }
+}
+
+/// What a mode measures.
+struct Plan {
+    /// The exact beam's element counts; the last is the beam's reference.
+    elements: Vec<usize>,
+    /// Every rtol of the paper's model and of Radau.
+    rtols: Vec<f64>,
+    /// The exact beam with the BDF: (n, rtol), where it is affordable (its steps follow the
+    /// highest element mode: n = 8 takes 226,000 at any rtol).
+    bdf: Vec<(usize, f64)>,
+    /// The references' rtol for n and fewer elements, and for more.
+    reference_rtol: (usize, f64, f64),
+    rounds: usize,
+}
+
+fn plan(mode: Mode) -> Plan {
+    match mode {
+        Mode::Full => Plan {
+            elements: vec![2, 8, 32],
+            rtols: (2..=8).map(|k| 10f64.powi(-k)).collect(),
+            bdf: vec![(2, 1e-2), (2, 1e-3), (2, 1e-4), (2, 1e-6), (2, 1e-8), (8, 1e-6)],
+            reference_rtol: (8, 1e-10, 1e-9),
+            rounds: 3,
+        },
+        Mode::Quick => Plan {
+            elements: vec![2, 8],
+            rtols: vec![1e-3, 1e-4, 1e-6],
+            bdf: vec![(2, 1e-3), (2, 1e-6)],
+            reference_rtol: (8, 1e-9, 1e-9),
+            rounds: 2,
+        },
+    }
+}
+
+/// The scene: the paper's, undamped, reduced; `elements` 0 is the paper's model.
+fn problem(elements: usize) -> Result<Problem> {
+    let path = project_root().join("scenes").join("paper.toml");
+    let mut scene = read_scene(&path)?;
+    scene.formulation = Formulation::Reduced;
+    if elements > 0 {
+        scene.params.beam = BeamModel::Exact;
+        scene.params.n_elements = elements;
+    }
+    Ok(on_grid(&format!("exact-{elements}"), scene, &path)?)
+}
+
+/// What an untimed run gives: the outputs on the grid and the counters.
+struct Trajectory {
+    rows: Vec<Outputs>,
+    stats: Stats,
+}
+
+/// A run of `case` recording every output on the grid (the CLI's driver, `Run`).
+fn trajectory(problem: &Problem, integrator: IntegratorChoice, rtol: f64) -> Result<Trajectory> {
+    let mut scene: Scene = problem.scene.clone();
+    scene.solver.rtol = rtol;
+    scene.solver.integrator = integrator;
+    scene.validate()?;
+    let max_steps = BdfConfig::default().max_steps;
+    let mut run =
+        Run::start(&scene, 0.0, Sample::value(0.0, 0.0), max_steps).map_err(|e| e.to_string())?;
+    let mut rows = Vec::with_capacity(problem.grid.len());
+    run.step_to_sampling(scene.t_end, problem.grid.iter().copied(), |run, t| {
+        rows.push(run.outputs_at(t)?);
+        Ok(())
+    })
+    .map_err(|e| e.to_string())?;
+    Ok(Trajectory { rows, stats: run.stats() })
+}
+
+/// An output compared: its name and value.
+type Quantity = (&'static str, fn(&Outputs) -> f64);
+
+/// The outputs compared.
+const QUANTITIES: [Quantity; 4] = [
+    ("v1", |o| o.v1),
+    ("theta1", |o| o.theta1),
+    ("M", |o| o.reactions.m),
+    ("M_root", |o| o.root.1),
+];
+
+/// Per quantity, the largest |difference| over the grid over the reference's largest |value|.
+fn errors(rows: &[Outputs], reference: &[Outputs]) -> [f64; 4] {
+    QUANTITIES.map(|(_, f)| {
+        let scale = reference.iter().map(|o| f(o).abs()).fold(0.0, f64::max).max(1e-300);
+        rows.iter().zip(reference).map(|(a, b)| (f(a) - f(b)).abs()).fold(0.0, f64::max) / scale
+    })
+}
+
+/// The relative difference of the peaks |max| of a quantity (index into [`QUANTITIES`]).
+fn peak_change(rows: &[Outputs], reference: &[Outputs], k: usize) -> f64 {
+    let f = QUANTITIES[k].1;
+    let peak = |r: &[Outputs]| r.iter().map(|o| f(o).abs()).fold(0.0, f64::max);
+    peak(rows) / peak(reference) - 1.0
+}
+
+/// One case's result.
+struct Point {
+    case: Case,
+    /// Integration error (against the same n), per quantity.
+    integration: [f64; 4],
+    /// Against the beam (the largest n), per quantity; the paper's model too.
+    beam: [f64; 4],
+    /// Relative change of the peaks of M and M_root against the same n's reference.
+    peaks: [f64; 2],
+    /// Energy at t_end minus the reference's [J].
+    energy_lost: f64,
+    steps: u64,
+    seconds: f64,
+    failure: Option<String>,
+}
+
+/// `bench-exact [--quick]`: measures and writes target/bench/exact.md (copied to
+/// docs/work_precision_exact.md by a full run).
+pub fn run(mode: Mode) -> Result {
+    let plan = plan(mode);
+    let started = Instant::now();
+    let beam_n = *plan.elements.last().expect("at least one element count");
+    // The references, one per n, shared by every integrator.
+    let mut references = Vec::new();
+    for &n in &plan.elements {
+        let rtol =
+            if n <= plan.reference_rtol.0 { plan.reference_rtol.1 } else { plan.reference_rtol.2 };
+        let t = Instant::now();
+        let reference = trajectory(&problem(n)?, IntegratorChoice::Radau, rtol)?;
+        eprintln!(
+            "bench-exact: reference n = {n}, radau at rtol {rtol:e}: {} steps, {:.1} s",
+            reference.stats.steps,
+            t.elapsed().as_secs_f64()
+        );
+        references.push((n, rtol, reference));
+    }
+    // The BDF's reference for the smallest n: how far the two integrators' references agree.
+    let (n0, rtol0, ref0) = &references[0];
+    let check = trajectory(&problem(*n0)?, IntegratorChoice::Bdf, *rtol0)?;
+    let agreement = errors(&check.rows, &ref0.rows)[0];
+    let beam = &references.last().expect("a reference").2.rows;
+
+    let mut cases = Vec::new();
+    for &rtol in &plan.rtols {
+        cases.push(Case { elements: 0, integrator: IntegratorChoice::Bdf, rtol });
+        for &n in &plan.elements {
+            cases.push(Case { elements: n, integrator: IntegratorChoice::Radau, rtol });
+        }
+    }
+    for &(elements, rtol) in &plan.bdf {
+        cases.push(Case { elements, integrator: IntegratorChoice::Bdf, rtol });
+    }
+    let problems: Vec<(usize, Problem)> = std::iter::once(0)
+        .chain(plan.elements.iter().copied())
+        .map(|n| problem(n).map(|p| (n, p)))
+        .collect::<Result<_>>()?;
+    let problem_of = |n: usize| &problems.iter().find(|(m, _)| *m == n).expect("built").1;
+
+    let mut points = Vec::new();
+    for &case in &cases {
+        let own = references.iter().find(|(n, _, _)| *n == case.elements);
+        let point = match trajectory(problem_of(case.elements), case.integrator, case.rtol) {
+            Ok(tr) => {
+                let own = own.map_or(&tr.rows, |(_, _, r)| &r.rows);
+                let energy_end = |r: &[Outputs]| r.last().map_or(f64::NAN, |o| o.energy);
+                Point {
+                    case,
+                    integration: errors(&tr.rows, own),
+                    beam: errors(&tr.rows, beam),
+                    peaks: [peak_change(&tr.rows, own, 2), peak_change(&tr.rows, own, 3)],
+                    energy_lost: energy_end(own) - energy_end(&tr.rows),
+                    steps: tr.stats.steps,
+                    seconds: f64::NAN,
+                    failure: None,
+                }
+            }
+            Err(e) => Point {
+                case,
+                integration: [f64::NAN; 4],
+                beam: [f64::NAN; 4],
+                peaks: [f64::NAN; 2],
+                energy_lost: f64::NAN,
+                steps: 0,
+                seconds: f64::NAN,
+                failure: Some(e.to_string()),
+            },
+        };
+        eprintln!(
+            "bench-exact: {} at rtol {:e}: {} steps, v1 {:.2e} against the beam{}",
+            case.label(),
+            case.rtol,
+            point.steps,
+            point.beam[0],
+            point.failure.as_deref().map_or(String::new(), |f| format!(" (failed: {f})"))
+        );
+        points.push(point);
+    }
+
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); cases.len()];
+    for round in 0..plan.rounds {
+        let mut order: Vec<usize> =
+            (0..cases.len()).filter(|&k| points[k].failure.is_none()).collect();
+        shuffle(&mut order, round as u64 + 1);
+        for k in order {
+            let case = cases[k];
+            let t = Instant::now();
+            let o = ours::with_integrator(problem_of(case.elements), case.integrator, case.rtol)?;
+            times[k].push(t.elapsed().as_secs_f64());
+            std::hint::black_box(o);
+        }
+        eprintln!("bench-exact: round {} of {} done", round + 1, plan.rounds);
+    }
+    for (p, t) in points.iter_mut().zip(&mut times) {
+        t.sort_by(f64::total_cmp);
+        if !t.is_empty() {
+            p.seconds = t[t.len() / 2];
+        }
+    }
+    let header = Header {
+        mode,
+        rounds: plan.rounds,
+        seconds: started.elapsed().as_secs_f64(),
+        references: references.iter().map(|(n, r, t)| (*n, *r, t.stats.steps)).collect(),
+        agreement,
+        beam_n,
+    };
+    let md = report(&points, &header);
+    super::write_report(&md, "exact.md", "work_precision_exact.md", mode)?;
+    Ok(())
+}
+
+/// What the report says of the run as a whole.
+struct Header {
+    mode: Mode,
+    rounds: usize,
+    seconds: f64,
+    /// (n, rtol, steps) of each reference.
+    references: Vec<(usize, f64, u64)>,
+    /// The smallest n's reference by the BDF against Radau's, v1.
+    agreement: f64,
+    beam_n: usize,
+}
+
+fn report(points: &[Point], h: &Header) -> String {
+    let mut md = String::from("# Work against precision: the exact beam, undamped\n\n");
+    let refs: Vec<String> =
+        h.references.iter().map(|(n, r, s)| format!("n = {n} at rtol {r:e} ({s} steps)")).collect();
+    let (n0, r0, _) = h.references[0];
+    let _ = writeln!(
+        md,
+        "Written by `cargo xtask bench-exact` ({}; {} rounds, medians; {:.0} s in all) on this \
+         machine's 2 cores. The scene: scenes/paper.toml, undamped, reduced, 10.2 s on the \
+         0.01 s grid; the geometrically exact beam in n elements against the paper's model (the \
+         quadratic beam in one element, its BDF) at the same rtol, each integrator with its \
+         default atol (the BDF 1e-3·rtol, Radau rtol). See bench/src/bench/exact.rs.\n\n\
+         - **Integration error**: against the same n at a tight rtol (Radau): {}. The BDF's \
+         run of n = {n0} at rtol {r0:e} is {:.1e} of the peak of v1 from Radau's.\n\
+         - **Against the beam**: against n = {} (the converged exact beam: the model's error \
+         and the integration's together); the paper's model too.\n\
+         - Each is the largest |difference| over the grid and the whole run over the \
+         reference's largest |value|. ΔE: the energy at 10.2 s minus the reference's (after the \
+         turn the model conserves it; what an integrator's damping takes out). M, M_root peak: \
+         the relative change of max |M| and max |M_root| (the element modes' accelerations).\n",
+        if h.mode == Mode::Quick { "--quick" } else { "full" },
+        h.rounds,
+        h.seconds,
+        refs.join(", "),
+        h.agreement,
+        h.beam_n,
+    );
+    md.push_str(
+        "| beam (integrator) | rtol | steps | time [ms] | × the paper's model | v1 | ϑ1 | M | \
+         M_root | v1 against the beam | ϑ1 against the beam | M peak | M_root peak | ΔE [J] |\n",
+    );
+    md.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let paper_time = |rtol: f64| {
+        points
+            .iter()
+            .find(|p| p.case.elements == 0 && p.case.rtol == rtol)
+            .map(|p| p.seconds)
+            .unwrap_or(f64::NAN)
+    };
+    for p in points {
+        let c = &p.case;
+        if let Some(why) = &p.failure {
+            let why = why.split(": the energy").next().unwrap_or(why);
+            let _ = writeln!(
+                md,
+                "| {} | {:e} | failed: {why} | | | | | | | | | | | |",
+                c.label(),
+                c.rtol
+            );
+            continue;
+        }
+        let ratio = if c.elements == 0 {
+            "1".to_string()
+        } else {
+            format!("{:.0}", p.seconds / paper_time(c.rtol))
+        };
+        let own = |x: f64| if c.elements == 0 { "—".to_string() } else { format!("{x:.1e}") };
+        let _ = writeln!(
+            md,
+            "| {} | {:e} | {} | {:.2} | {ratio} | {} | {} | {} | {} | {:.1e} | {:.1e} | {} | {} | \
+             {} |",
+            c.label(),
+            c.rtol,
+            p.steps,
+            1e3 * p.seconds,
+            own(p.integration[0]),
+            own(p.integration[1]),
+            own(p.integration[2]),
+            own(p.integration[3]),
+            p.beam[0],
+            p.beam[1],
+            own(p.peaks[0]),
+            own(p.peaks[1]),
+            if c.elements == 0 { "—".to_string() } else { format!("{:+.1e}", -p.energy_lost) },
+        );
+    }
+    md.push_str("\n## The goals of issue 46, as measured here\n\n");
+    for line in goals(points) {
+        let _ = writeln!(md, "- {line}");
+    }
+    md
+}
+
+/// The issue's goals this benchmark measures, each with its figure and verdict.
+fn goals(points: &[Point]) -> Vec<String> {
+    let find = |n: usize, i: IntegratorChoice, rtol: f64| {
+        points.iter().find(|p| {
+            p.case.elements == n
+                && p.case.integrator == i
+                && p.case.rtol == rtol
+                && p.failure.is_none()
+        })
+    };
+    let verdict = |ok: bool| if ok { "**holds**" } else { "**does not hold**" };
+    let radau = IntegratorChoice::Radau;
+    let mut out = Vec::new();
+    // Steps within 1.5× across n at rtol 1e-6.
+    let steps: Vec<(usize, u64)> = points
+        .iter()
+        .filter(|p| p.case.elements > 0 && p.case.integrator == radau && p.case.rtol == 1e-6)
+        .filter(|p| p.failure.is_none())
+        .map(|p| (p.case.elements, p.steps))
+        .collect();
+    if steps.len() > 1 {
+        let max = steps.iter().map(|s| s.1).max().unwrap_or(0) as f64;
+        let min = steps.iter().map(|s| s.1).min().unwrap_or(1) as f64;
+        let list: Vec<String> = steps.iter().map(|(n, s)| format!("{s} at n = {n}")).collect();
+        out.push(format!(
+            "Steps at rtol 1e-6 within 1.5× of each other across n: {} (ratio {:.2}): {}.",
+            list.join(", "),
+            max / min,
+            verdict(max / min <= 1.5)
+        ));
+    }
+    // The exact beam in 8 elements within 1e-4 of the beam, at most 100× the paper's model.
+    let cheapest = points
+        .iter()
+        .filter(|p| p.case.elements == 8 && p.case.integrator == radau && p.failure.is_none())
+        .filter(|p| p.beam[0] <= 1e-4)
+        .max_by(|a, b| a.case.rtol.total_cmp(&b.case.rtol));
+    if let Some(p) = cheapest {
+        let paper = find(0, IntegratorChoice::Bdf, p.case.rtol);
+        if let Some(paper) = paper {
+            let ratio = p.seconds / paper.seconds;
+            out.push(format!(
+                "8 elements within 1e-4 of the beam's peak of v1 ({:.1e} at rtol {:e}) in {:.0}× \
+                 the paper's model's time at the same rtol ({:.2} ms against {:.3} ms), at most \
+                 100×: {}.",
+                p.beam[0],
+                p.case.rtol,
+                ratio,
+                1e3 * p.seconds,
+                1e3 * paper.seconds,
+                verdict(ratio <= 100.0)
+            ));
+        }
+    }
+    // 32 elements at rtol 1e-6 in under 5 s.
+    if let Some(p) = find(32, radau, 1e-6) {
+        out.push(format!(
+            "32 elements at rtol 1e-6 in {:.2} s, under 5 s: {}.",
+            p.seconds,
+            verdict(p.seconds < 5.0)
+        ));
+    }
+    // Error falls with rtol, at every n.
+    let ns: Vec<usize> = {
+        let mut ns: Vec<usize> =
+            points.iter().map(|p| p.case.elements).filter(|&n| n > 0).collect();
+        ns.sort_unstable();
+        ns.dedup();
+        ns
+    };
+    for n in ns {
+        let all: Vec<&Point> =
+            points.iter().filter(|p| p.case.elements == n && p.case.integrator == radau).collect();
+        let failed = all.iter().filter(|p| p.failure.is_some()).count();
+        let mut series: Vec<&Point> = all.into_iter().filter(|p| p.failure.is_none()).collect();
+        series.sort_by(|a, b| b.case.rtol.total_cmp(&a.case.rtol));
+        let falls = series.windows(2).all(|w| w[1].integration[0] < w[0].integration[0]);
+        let list: Vec<String> = series
+            .iter()
+            .map(|p| format!("{:.0e}: {:.1e}", p.case.rtol, p.integration[0]))
+            .collect();
+        out.push(format!(
+            "n = {n}, Radau: every rtol runs to the end and the integration error of v1 falls \
+             with rtol ({}): {}.",
+            list.join(", "),
+            verdict(falls && failed == 0 && !series.is_empty())
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(elements: usize, rtol: f64, steps: u64, error: f64, seconds: f64) -> Point {
+        let integrator =
+            if elements == 0 { IntegratorChoice::Bdf } else { IntegratorChoice::Radau };
+        Point {
+            case: Case { elements, integrator, rtol },
+            integration: [error; 4],
+            beam: [error; 4],
+            peaks: [0.0; 2],
+            energy_lost: 0.0,
+            steps,
+            seconds,
+            failure: None,
+        }
+    }
+
+    /// The verdicts follow the figures: steps within 1.5×, the price against the paper's
+    /// model at the loosest rtol within 1e-4, an error that must fall with rtol.
+    #[test]
+    fn the_goals_say_what_the_figures_say() {
+        let mut points = vec![
+            point(0, 1e-4, 1000, 0.8, 0.001),
+            point(0, 1e-6, 3000, 0.8, 0.002),
+            point(2, 1e-4, 1500, 2e-4, 0.01),
+            point(8, 1e-4, 1800, 5e-5, 0.05),
+            point(2, 1e-6, 6000, 2e-6, 0.05),
+            point(8, 1e-6, 8000, 4e-7, 0.3),
+        ];
+        let text = goals(&points).join("\n");
+        assert!(text.contains("(ratio 1.33): **holds**"), "{text}");
+        assert!(
+            text.contains("in 50× the paper's model's time") && text.contains("100×: **holds**")
+        );
+        assert!(!text.contains("does not hold"), "{text}");
+        points[5].steps = 9001;
+        points[3].seconds = 0.2;
+        points[4].integration[0] = 3e-4;
+        let text = goals(&points).join("\n");
+        assert!(text.contains("(ratio 1.50): **does not hold**"), "{text}");
+        assert!(text.contains("in 200× the paper's model's time"), "{text}");
+        assert!(
+            text.contains("n = 2, Radau")
+                && text.contains("rtol (1e-4: 2.0e-4, 1e-6: 3.0e-4): **does not hold**"),
+            "{text}"
+        );
+    }
+}
