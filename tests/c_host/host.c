@@ -644,6 +644,7 @@ typedef struct {
     char guid[128]; /* FMI 3.0: the instantiationToken */
     fmi2ValueReference ei, phi_end, phi_source, v1, theta1, u2;
     fmi2ValueReference phi, fixed_step, phi_interpolation; /* for --bench-dostep */
+    fmi2ValueReference beam, integrator, n_elements2;      /* --bench-dostep, FMI 2.0 */
     fmi2ValueReference time, intermediate_step;            /* FMI 3.0 only */
     fmi2ValueReference n_elements, nodal_v;                /* FMI 3.0 only: arrays */
 } Model;
@@ -877,8 +878,11 @@ static int read_model(const char *unzipdir, int fmi3, Model *m, Err *err) {
         find_vr(xml, m, "Float64", "u2", &m->u2, err) ||
         find_vr(xml, m, "Float64", "phi", &m->phi, err) ||
         find_vr(xml, m, "Float64", "fixed_step", &m->fixed_step, err) ||
-        find_vr(xml, m, "Enumeration", "phi_interpolation", &m->phi_interpolation, err))
+        find_vr(xml, m, "Enumeration", "phi_interpolation", &m->phi_interpolation, err) ||
+        find_vr(xml, m, "Enumeration", "beam", &m->beam, err) ||
+        find_vr(xml, m, "Enumeration", "integrator", &m->integrator, err))
         goto out;
+    if (!fmi3 && find_vr(xml, m, "Int32", "n_elements", &m->n_elements2, err)) goto out;
     if (fmi3 && (find_vr(xml, m, "Float64", "time", &m->time, err) ||
                  find_vr(xml, m, "Float64", "intermediate_step", &m->intermediate_step, err) ||
                  find_vr(xml, m, "UInt64", "n_elements", &m->n_elements, err) ||
@@ -2421,9 +2425,16 @@ static int unload(Lib lib, const char *path, Err *err) {
 /* How phi arrives: the fixed-step floor (BDF2 with h = the communication step and phi from the
  * built-in law: one internal step per communication step), the built-in law with the adaptive BDF,
  * and the input sent as values, as values with phi' and phi'' (smooth interpolation), and as values
- * with derivatives under phi_interpolation = taylor. */
-enum { FEED_FLOOR, FEED_LAW, FEED_VALUES, FEED_DERIVATIVES, FEED_TAYLOR, N_FEEDS };
-static const char *const FEEDS[N_FEEDS] = {"floor", "law", "values", "derivatives", "taylor"};
+ * with derivatives under phi_interpolation = taylor. Then the exact beam in 8 elements with the
+ * law (at the 1 ms communication step only): the BDF and Radau IIA at tolerance 1e-6, and Radau at
+ * 1e-4 (where 8 elements are within 1e-4 of the converged beam, docs/work_precision_exact.md). */
+enum {
+    FEED_FLOOR, FEED_LAW, FEED_VALUES, FEED_DERIVATIVES, FEED_TAYLOR,
+    FEED_EXACT_BDF, FEED_EXACT_RADAU, FEED_EXACT_RADAU_LOOSE, N_FEEDS
+};
+static const char *const FEEDS[N_FEEDS] = {"floor", "law", "values", "derivatives", "taylor",
+                                           "exact-bdf", "exact-radau", "exact-radau-1e-4"};
+#define EXACT_H 1e-3
 static const double BENCH_H[] = {1e-2, 1e-3, 1e-4};
 #define N_BENCH_H (sizeof BENCH_H / sizeof BENCH_H[0])
 
@@ -2454,9 +2465,17 @@ static int bench_case(const Host *h, int feed, double hc, double *seconds, int *
     double *p = NULL;
     const int n = (int)lround(T_END / hc);
     const fmi2Integer law = PHI_SOURCE_LAW, taylor = 2;
-    const int input = feed >= FEED_VALUES, derivatives = feed >= FEED_DERIVATIVES;
-    OK(f->SetupExperiment(c, fmi2True, 1e-6, 0.0, fmi2True, T_END));
+    const int exact = feed >= FEED_EXACT_BDF;
+    const int input = feed >= FEED_VALUES && !exact, derivatives = input && feed >= FEED_DERIVATIVES;
+    OK(f->SetupExperiment(c, fmi2True, feed == FEED_EXACT_RADAU_LOOSE ? 1e-4 : 1e-6, 0.0, fmi2True,
+                          T_END));
     if (!input) OK(f->SetInteger(c, &m->phi_source, 1, &law));
+    if (exact) { /* enumerations count from 1: beam quadratic, exact; integrator auto, bdf, radau */
+        const fmi2Integer beam = 2, elements = 8, integrator = feed == FEED_EXACT_BDF ? 2 : 3;
+        OK(f->SetInteger(c, &m->beam, 1, &beam));
+        OK(f->SetInteger(c, &m->n_elements2, 1, &elements));
+        OK(f->SetInteger(c, &m->integrator, 1, &integrator));
+    }
     if (feed == FEED_FLOOR) OK(f->SetReal(c, &m->fixed_step, 1, &hc));
     if (feed == FEED_TAYLOR) OK(f->SetInteger(c, &m->phi_interpolation, 1, &taylor));
     OK(f->EnterInitializationMode(c));
@@ -2508,6 +2527,7 @@ static int bench_dostep(const Host *h, int rounds, const char *only, double only
             double hc = BENCH_H[order[i] % (int)N_BENCH_H];
             if (only && strcmp(only, FEEDS[feed])) continue;
             if (only_h > 0.0 && hc != only_h) continue;
+            if (feed >= FEED_EXACT_BDF && hc != EXACT_H) continue;
             double seconds = 0.0;
             int steps = 0;
             if (bench_case(h, feed, hc, &seconds, &steps, err)) return -1;

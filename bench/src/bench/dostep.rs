@@ -1,6 +1,7 @@
 //! The cost of one fmi2DoStep for each way φ arrives, against the communication step, from a
 //! bare C host (`tests/c_host/host.c --bench-dostep`): the packaged FMU's library loaded with
-//! dlopen, the paper's scene at tolerance 1e-6, communication steps 1e-2, 1e-3 and 1e-4 s.
+//! dlopen, the paper's scene at tolerance 1e-6, communication steps 1e-2, 1e-3 and 1e-4 s; and
+//! the exact beam in 8 elements at 1e-3 s, with the BDF and with Radau IIA.
 //!
 //! The floor is one internal step per communication step: the fixed-step BDF2 with h = the
 //! communication step and φ from the built-in law, through the same FMI calls. Each other way
@@ -21,7 +22,16 @@ use std::process::Command;
 use crate::{project_root, relative, write_text, Mode, Result};
 
 /// The feeds in the order of the report, as the host names them.
-const FEEDS: [&str; 5] = ["floor", "law", "values", "derivatives", "taylor"];
+const FEEDS: [&str; 8] = [
+    "floor",
+    "law",
+    "values",
+    "derivatives",
+    "taylor",
+    "exact-bdf",
+    "exact-radau",
+    "exact-radau-1e-4",
+];
 
 /// Compiles the host, runs it on the extracted FMU in `fmu_dir`, and writes the report.
 pub fn run(mode: Mode, fmu_dir: &Path, out_dir: &Path) -> Result<String> {
@@ -105,7 +115,11 @@ fn report(csv: &str, rounds: u32) -> Result<String> {
          communication step and φ from the law, one internal step per communication step; \
          *law*: the adaptive BDF with φ from the law; *values*, *derivatives*: φ sent as an \
          input (fmi2SetReal; with fmi2SetRealInputDerivatives of φ′ and φ″), smooth \
-         interpolation; *taylor*: derivatives with `phi_interpolation = taylor`.\n"
+         interpolation; *taylor*: derivatives with `phi_interpolation = taylor`. At H = 1e-3 \
+         only, the exact beam in 8 elements (`beam = exact`, `n_elements = 8`) with the law: \
+         *exact-bdf* and *exact-radau*, `integrator = bdf` and `radau` at tolerance 1e-6; \
+         *exact-radau-1e-4*: Radau at 1e-4, where 8 elements are within 1e-4 of the converged \
+         beam (docs/work_precision_exact.md). × floor is against the paper's model's floor.\n"
     )
     .expect("String");
     writeln!(md, "| H [s] | way φ arrives | ns per DoStep | × floor | real-time factor |")
