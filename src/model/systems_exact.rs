@@ -132,13 +132,13 @@ impl OdeSystem<Dyn> for ExactSystem<'_> {
         f
     }
 
-    /// The parts M, C = ∂R/∂q̇ and S = ∂R/∂q at the accelerations of y, dense: S and C by
-    /// forward differences of the residual (O(n) each, so O(n²) in all).
     fn residual(&self, t: f64, x: &[f64], v: &[f64], a: &[f64], out: &mut [f64]) -> bool {
         self.model.residual(&self.phi.eval(t), x, v, a, out);
         true
     }
 
+    /// The parts M, C = ∂R/∂q̇ and S = ∂R/∂q at the accelerations of y, dense: S and C by
+    /// forward differences of the residual (O(n) a column, so O(n²) in all).
     fn second_order(&self, t: f64, y: &DVector<f64>) -> Option<SecondOrder> {
         let model = self.model;
         let nq = model.dofs();
@@ -149,20 +149,8 @@ impl OdeSystem<Dyn> for ExactSystem<'_> {
         if !acc.iter().all(|x| x.is_finite()) {
             return None;
         }
-        let mut r0 = vec![0.0; nq];
-        model.residual(&phi, q, qd, &acc, &mut r0);
         let mut parts = DMatrix::zeros(nq, 2 * nq);
-        let (mut x, mut r) = (y.as_slice().to_vec(), vec![0.0; nq]);
-        for c in 0..2 * nq {
-            let step = 1e-7 * (1.0 + x[c].abs());
-            x[c] += step;
-            let (qp, qdp) = x.split_at(nq);
-            model.residual(&phi, qp, qdp, &acc, &mut r);
-            x[c] = y[c];
-            for k in 0..nq {
-                parts[(k, c)] = (r[k] - r0[k]) / step;
-            }
-        }
+        model.residual_differences(&phi, q, qd, &acc, &mut parts);
         Some(SecondOrder::Dense(DenseParts {
             mass: model.mass_matrix(q, phi.phi),
             damping: parts.columns(nq, nq).into_owned(),
