@@ -40,16 +40,20 @@ const MAX_FACTOR: f64 = 8.0;
 /// A new step within [1, 1.2] of the old keeps the old one and its factorisation (RADAU5's
 /// QUOT1, QUOT2).
 const KEEP_STEP: f64 = 1.2;
-/// Newton's contraction below which the Jacobian is kept for the next step (RADAU5's THET).
-const KEEP_JACOBIAN: f64 = 1e-3;
+/// Newton's contraction below which the Jacobian is kept for the next step (RADAU5's THET:
+/// 1e-3 by default, 0.1 "when Jacobian evaluations are costly", as the exact beam's are, O(n²)
+/// by differences: with 0.1 and the age below, 159 Jacobians for 8 elements at rtol 1e-4
+/// against 538, 10 % fewer instructions, v1 3.6e-5 of its peak against 3.3e-5;
+/// docs/decisions.md, "Radau IIA for the exact beam").
+const KEEP_JACOBIAN: f64 = 0.1;
 /// Steps after which the Jacobian is evaluated again however fast Newton converges. The error
 /// estimate is filtered by the Newton matrix: with one from another configuration it
 /// misjudges the modes near h·ω ≈ μ, and the error no longer follows the tolerance (the
 /// exact beam in 8 elements, whose Newton converges at rates of 1e-9 with the Jacobian of the
 /// straight beam: v1 1.7e-6 of its peak at rtol 1e-6 with it, 3.3e-7 with one every 4 steps,
-/// 3.6e-7 with one every step). CVODE refreshes its Jacobian every 50 steps for the same
-/// reason (MSBJ).
-const JACOBIAN_AGE: u64 = 4;
+/// 3.5e-7 with one every 16, 3.6e-7 with one every step). CVODE refreshes its Jacobian every
+/// 50 steps for the same reason (MSBJ).
+const JACOBIAN_AGE: u64 = 16;
 /// Failures of one step before the integrator gives up.
 const MAX_FAILURES: u32 = 10;
 /// A step this close to the stop time (relative) is stretched to land on it.
