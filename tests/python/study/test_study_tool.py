@@ -264,10 +264,10 @@ def test_a_contour_level_outside_the_data_is_said_and_the_plot_written(beam_body
 # --- Ctrl-C on Dask ----------------------------------------------------------------------------
 
 
-def start_long_study(beam_body, tmp_path, engine):
-    """A study of 6000 cases in chunks of 100 started in its own process group, which gets a SIGINT
-    as a terminal's Ctrl-C does (the tool, its LocalCluster's threads and the CLI processes of the
-    chunks in flight): (the process, its arguments, the output, the chunks' directory)."""
+def start_long_study(beam_body, tmp_path, engine, chunk_size=100):
+    """A study of 6000 cases in chunks of `chunk_size` started in its own process group, which gets a
+    SIGINT as a terminal's Ctrl-C does (the tool, its LocalCluster's threads and the CLI processes of
+    the chunks in flight): (the process, its arguments, the output, the chunks' directory)."""
     study = write(tmp_path / "long.toml", f"""
 scene = "{PAPER_SCENE}"
 metrics = ["peak_M"]
@@ -278,7 +278,7 @@ count = 6000
 """)
     out, parts = tmp_path / "long.parquet", tmp_path / "long.parquet.parts"
     args = [sys.executable, "-m", "beam_body_study", "run", str(study), "-o", str(out),
-            "--engine", engine, "--chunk-size", "100"] + (["--workers", "2"] if engine == "dask" else [])
+            "--engine", engine, "--chunk-size", str(chunk_size)] + (["--workers", "2"] if engine == "dask" else [])
     run = subprocess.Popen(args, env=env(beam_body), cwd=REPO, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True, start_new_session=True)
     return run, args, out, parts
@@ -337,7 +337,10 @@ def test_a_chunk_whose_cli_is_interrupted_interrupts_the_run(beam_body, tmp_path
     reports the run as interrupted, exit 130, with what it kept, and no chunk as failed."""
     import psutil
 
-    run, _, _, parts = start_long_study(beam_body, tmp_path, engine)
+    # Chunks of 500 (0.4 s or more each): a CLI signalled in the last milliseconds of its chunk, as
+    # it writes its rows, finishes it, and with chunks of 100 (75 ms) CI once saw every one do so
+    # and the study end with exit 0.
+    run, _, _, parts = start_long_study(beam_body, tmp_path, engine, chunk_size=500)
     tool = psutil.Process(run.pid)
 
     def catches_sigint(p) -> bool:
