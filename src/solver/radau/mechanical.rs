@@ -106,6 +106,11 @@ where
             }
             old_norm = n;
         }
+        if result.is_ok() {
+            self.stage_acc = (0..m)
+                .map(|c| (ai[2][0] * zv[0][c] + ai[2][1] * zv[1][c] + ai[2][2] * zv[2][c]) / h)
+                .collect();
+        }
         // The first-order stages: Zx_i = c_i h ẋ_n + h Σ_j a_ij Zv_j.
         for (i, zi) in z.iter_mut().enumerate() {
             let s = zi.as_mut_slice();
