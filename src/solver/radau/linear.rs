@@ -134,14 +134,20 @@ where
         Some(())
     }
 
-    /// The same with γ = h/(α − iβ) for re + i·im, in place.
-    pub fn solve_reduced_complex(&self, re: &mut [f64], im: &mut [f64]) -> Option<()> {
+    /// The same with γ = h/(α − iβ) for re + i·im, in place; `b` is room for the complex
+    /// right-hand side.
+    pub fn solve_reduced_complex(
+        &self,
+        re: &mut [f64],
+        im: &mut [f64],
+        b: &mut Vec<C64>,
+    ) -> Option<()> {
         let Factors::Second { h, complex, .. } = self else { return None };
         let (_, gc) = gammas(*h);
-        let mut b: Vec<C64> =
-            re.iter().zip(im.iter()).map(|(r, i)| gc * C64::new(*r, *i)).collect();
-        complex.solve(&mut b);
-        for ((r, i), z) in re.iter_mut().zip(im.iter_mut()).zip(b) {
+        b.clear();
+        b.extend(re.iter().zip(im.iter()).map(|(r, i)| gc * C64::new(*r, *i)));
+        complex.solve(b);
+        for ((r, i), z) in re.iter_mut().zip(im.iter_mut()).zip(b.iter()) {
             *r = z.re;
             *i = z.im;
         }
@@ -165,7 +171,8 @@ where
     DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
     rows: OMatrix<C64, D, D>,
-    perm: OVector<usize, D>,
+    /// Row k was swapped with row `swaps[k]` at step k (LAPACK's ipiv).
+    swaps: Vec<usize>,
 }
 
 #[allow(clippy::needless_range_loop)]
@@ -179,7 +186,7 @@ where
         let n = d.value();
         let mut rows = a.transpose();
         let f = rows.as_mut_slice();
-        let mut perm = OVector::<usize, D>::from_fn_generic(d, U1, |i, _| i);
+        let mut swaps = Vec::with_capacity(n);
         let scale = f.iter().map(|z| z.norm_sqr()).fold(0.0, f64::max).sqrt();
         for k in 0..n {
             let (mut p, mut best) = (k, -1.0);
@@ -196,44 +203,42 @@ where
                 for j in 0..n {
                     f.swap(k * n + j, p * n + j);
                 }
-                perm.swap_rows(k, p);
             }
+            swaps.push(p);
             let inv = C64::new(1.0, 0.0) / f[k * n + k];
             f[k * n + k] = inv;
-            for i in k + 1..n {
-                let l = f[i * n + k] * inv;
-                f[i * n + k] = l;
+            // Rows below k minus multiples of row k, as slices (no index checks in the loop).
+            let (upper, lower) = f.split_at_mut((k + 1) * n);
+            let pivot_row = &upper[k * n + k + 1..(k + 1) * n];
+            for row in lower.chunks_exact_mut(n) {
+                let l = row[k] * inv;
+                row[k] = l;
                 if l != C64::new(0.0, 0.0) {
-                    for j in k + 1..n {
-                        let u = f[k * n + j];
-                        f[i * n + j] -= l * u;
+                    for (x, u) in row[k + 1..].iter_mut().zip(pivot_row) {
+                        *x -= l * u;
                     }
                 }
             }
         }
-        Some(Self { rows, perm })
+        Some(Self { rows, swaps })
     }
 
     /// A⁻¹ b, in place.
     pub fn solve(&self, b: &mut [C64]) {
         let n = b.len();
         let f = self.rows.as_slice();
-        let mut x: Vec<C64> = (0..n).map(|i| b[self.perm[i]]).collect();
-        for i in 0..n {
-            let mut s = x[i];
-            for j in 0..i {
-                s -= f[i * n + j] * x[j];
-            }
-            x[i] = s;
+        for (k, &p) in self.swaps.iter().enumerate() {
+            b.swap(k, p);
         }
-        for i in (0..n).rev() {
-            let mut s = x[i];
-            for j in i + 1..n {
-                s -= f[i * n + j] * x[j];
-            }
-            x[i] = s * f[i * n + i];
+        let x = b;
+        for (i, row) in f.chunks_exact(n).enumerate() {
+            let s: C64 = row[..i].iter().zip(&x[..i]).map(|(l, x)| l * x).sum();
+            x[i] -= s;
         }
-        b.copy_from_slice(&x);
+        for (i, row) in f.chunks_exact(n).enumerate().rev() {
+            let s: C64 = row[i + 1..].iter().zip(&x[i + 1..]).map(|(u, x)| u * x).sum();
+            x[i] = (x[i] - s) * row[i];
+        }
     }
 }
 

@@ -45,13 +45,17 @@ where
         // exact beam in 8 elements at rtol 1e-3: v1 6.4e-4 of its peak off with the same
         // tolerance, 3.9e-4 with a tenth, at the same cost).
         let tol = 0.1 * (10.0 * f64::EPSILON / r).max(0.03f64.min(r.sqrt()));
-        let mix = |c: &[[f64; 3]; 3], s: &[Stage; 3]| -> [Stage; 3] {
-            std::array::from_fn(|i| {
-                (0..m).map(|k| c[i][0] * s[0][k] + c[i][1] * s[1][k] + c[i][2] * s[2][k]).collect()
-            })
+        let mix = |c: &[[f64; 3]; 3], s: &[Stage; 3], out: &mut [Stage; 3]| {
+            for (o, c) in out.iter_mut().zip(c) {
+                for (k, o) in o.iter_mut().enumerate() {
+                    *o = c[0] * s[0][k] + c[1] * s[1][k] + c[2] * s[2][k];
+                }
+            }
         };
+        let stage = || -> [Stage; 3] { std::array::from_fn(|_| vec![0.0; m]) };
         let mut zv: [Stage; 3] = std::array::from_fn(|i| z[i].as_slice()[m..].to_vec());
-        let mut w = mix(&TI, &zv);
+        let (mut w, mut d, mut scratch) = (stage(), stage(), Vec::with_capacity(m));
+        mix(&TI, &zv, &mut w);
         let (mut x, mut v, mut acc, mut res) =
             (vec![0.0; m], vec![0.0; m], vec![0.0; m], [vec![0.0; m], vec![0.0; m], vec![0.0; m]]);
         let mut old_norm = 0.0;
@@ -77,10 +81,11 @@ where
                 result = Err(NewtonFail::NonFinite);
                 break;
             }
-            let [mut d0, mut d1, mut d2] = mix(&TI, &res);
-            factors.solve_reduced_real(&mut d0)?;
-            factors.solve_reduced_complex(&mut d1, &mut d2)?;
-            let n = ([&d0, &d1, &d2]
+            mix(&TI, &res, &mut d);
+            let [d0, d1, d2] = &mut d;
+            factors.solve_reduced_real(d0)?;
+            factors.solve_reduced_complex(d1, d2, &mut scratch)?;
+            let n = (d
                 .iter()
                 .flat_map(|d| d.iter().zip(wv).map(|(x, w)| (x / w) * (x / w)))
                 .sum::<f64>()
@@ -96,10 +101,10 @@ where
                     done
                 }
             };
-            for (w, d) in w.iter_mut().zip([&d0, &d1, &d2]) {
+            for (w, d) in w.iter_mut().zip(&d) {
                 w.iter_mut().zip(d).for_each(|(w, d)| *w += d);
             }
-            zv = mix(&T, &w);
+            mix(&T, &w, &mut zv);
             if converged {
                 result = Ok((k + 1, rate));
                 break;
