@@ -20,8 +20,7 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 2] = [Method::Bdf, Method::Radau];
-
+    /// Its name, as the `integrator` setting spells it.
     pub fn name(self) -> &'static str {
         match self {
             Method::Bdf => "bdf",

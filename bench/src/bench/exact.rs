@@ -20,10 +20,10 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use beam_body::model::{BeamModel, Formulation, Outputs, Sample};
+use beam_body::model::{BeamModel, Formulation, Outputs};
 use beam_body::scene::IntegratorChoice;
-use beam_body::sim::{Run, Scene};
-use beam_body::solver::{BdfConfig, Stats};
+use beam_body::sim::Scene;
+use beam_body::solver::Stats;
 
 use super::problem::{on_grid, read_scene, Problem};
 use super::{ours, shuffle};
@@ -42,16 +42,8 @@ impl Case {
     fn label(&self) -> String {
         match self.elements {
             0 => "the paper's model (bdf)".to_string(),
-            n => format!("exact, {n} ({})", integrator_name(self.integrator)),
+            n => format!("exact, {n} ({})", self.integrator.method(BeamModel::Exact, false).name()),
         }
-    }
-}
-
-fn integrator_name(i: IntegratorChoice) -> &'static str {
-    match i {
-        IntegratorChoice::Auto => "auto",
-        IntegratorChoice::Bdf => "bdf",
-        IntegratorChoice::Radau => "radau",
     }
 }
 
@@ -111,17 +103,12 @@ fn trajectory(problem: &Problem, integrator: IntegratorChoice, rtol: f64) -> Res
     let mut scene: Scene = problem.scene.clone();
     scene.solver.rtol = rtol;
     scene.solver.integrator = integrator;
-    scene.validate()?;
-    let max_steps = BdfConfig::default().max_steps;
-    let mut run =
-        Run::start(&scene, 0.0, Sample::value(0.0, 0.0), max_steps).map_err(|e| e.to_string())?;
     let mut rows = Vec::with_capacity(problem.grid.len());
-    run.step_to_sampling(scene.t_end, problem.grid.iter().copied(), |run, t| {
+    let stats = ours::drive(problem, &scene, |run, t| {
         rows.push(run.outputs_at(t)?);
         Ok(())
-    })
-    .map_err(|e| e.to_string())?;
-    Ok(Trajectory { rows, stats: run.stats() })
+    })?;
+    Ok(Trajectory { rows, stats })
 }
 
 /// An output compared: its name and value.

@@ -4,7 +4,7 @@
 
 use beam_body::model::Sample;
 use beam_body::scene::IntegratorChoice;
-use beam_body::sim::{Run, Scene};
+use beam_body::sim::{Run, Scene, SimError};
 use beam_body::solver::{BdfConfig, Stats};
 
 use super::problem::{Counters, Outcome, Problem, States};
@@ -54,19 +54,30 @@ pub fn bdf_fixed(problem: &Problem, h: f64) -> Result<Outcome, String> {
 /// from its dense output. Like the other solvers, it records the states only; the CLI's
 /// `simulate` would also compute accelerations, reactions and energy at every grid point.
 fn solve(problem: &Problem, scene: &Scene) -> Result<Outcome, String> {
+    let mut states = States::with_capacity(problem.grid.len());
+    let mut y = [0.0; 6];
+    let stats = drive(problem, scene, |run, t| {
+        let n = run.state_at(t, &mut y)?;
+        states.push(&y[..n]);
+        Ok(())
+    })?;
+    Ok(Outcome { states, counters: counters(&stats) })
+}
+
+/// The CLI's driver ([`Run`]) through `scene` to its t_end, calling `sink` at each time of the
+/// problem's grid; the run's counters.
+pub fn drive(
+    problem: &Problem,
+    scene: &Scene,
+    sink: impl FnMut(&mut Run, f64) -> Result<(), SimError>,
+) -> Result<Stats, String> {
     scene.validate()?;
     let max_steps = BdfConfig::default().max_steps;
     let mut run = Run::start(scene, 0.0, Sample::value(0.0, 0.0), max_steps)
         .map_err(|err| err.to_string())?;
-    let mut states = States::with_capacity(problem.grid.len());
-    let mut y = [0.0; 6];
-    run.step_to_sampling(scene.t_end, problem.grid.iter().copied(), |run, t| {
-        let n = run.state_at(t, &mut y)?;
-        states.push(&y[..n]);
-        Ok(())
-    })
-    .map_err(|err| err.to_string())?;
-    Ok(Outcome { states, counters: counters(&run.stats()) })
+    run.step_to_sampling(scene.t_end, problem.grid.iter().copied(), sink)
+        .map_err(|err| err.to_string())?;
+    Ok(run.stats())
 }
 
 fn counters(stats: &Stats) -> Counters {

@@ -143,7 +143,7 @@ pub fn run(args: Vec<OsString>) -> CmdResult {
                 s.max_order,
                 if s.stability_guard { "on" } else { "off" }
             ),
-            Method::Radau => "radau".to_string(),
+            Method::Radau => Method::Radau.name().to_string(),
         };
         format!("{method}, rtol {:e}, atol {:e}", s.rtol, config.atol())
     };
