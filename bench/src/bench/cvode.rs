@@ -40,7 +40,8 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr;
 use std::sync::OnceLock;
 
-use beam_body::model::PhiPiece;
+use beam_body::model::{Outputs, PhiPiece};
+use beam_body::sim::Equations;
 use beam_body::solver::OdeSystem;
 use libloading::Library;
 use nalgebra::{Const, SVector};
@@ -330,7 +331,63 @@ where
     S: OdeSystem<Const<N>> + Copy,
     F: Fn(PhiPiece) -> S,
 {
-    solve(api()?, problem, rtol, Options::default(), system, y0)
+    let width = state_names(problem.scene.formulation).len();
+    solve(api()?, problem, rtol, Options::default(), width, system, y0)
+}
+
+/// Solves `problem` through its state-space equations ([`Equations`], Model Exchange's: any
+/// beam, the exact one too) at `rtol`, atol = 1e-3·rtol, dense, recording every state (for
+/// [`outputs_of`]). For 4, 8 and 16 elements (16, 32, 64 states): CVODE's interface here is
+/// of a size fixed at compile time.
+pub fn run_equations(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
+    let api = api()?;
+    let eq = Equations::new(&problem.scene, 0.0, 0.0).map_err(|e| e.to_string())?;
+    let start = |piece| eq.start(piece).map_err(|e| e.to_string());
+    let piece = problem.scene.law.piece_from(0.0);
+    fn go<const N: usize>(
+        api: &Api,
+        problem: &Problem,
+        rtol: f64,
+        eq: &Equations,
+        y0: Vec<f64>,
+    ) -> Result<Outcome, String> {
+        let system = |piece| EquationsSystem::<N> { eq, piece };
+        solve(api, problem, rtol, Options::default(), N, system, SVector::from_vec(y0))
+    }
+    match eq.state_count() {
+        16 => go::<16>(api, problem, rtol, &eq, start(piece)?),
+        32 => go::<32>(api, problem, rtol, &eq, start(piece)?),
+        64 => go::<64>(api, problem, rtol, &eq, start(piece)?),
+        n => Err(format!("CVODE through the equations takes 16, 32 or 64 states, not {n}")),
+    }
+}
+
+/// The outputs (the CLI's) of the states [`run_equations`] recorded on the problem's grid;
+/// each time with the piece of φ from it.
+pub fn outputs_of(problem: &Problem, outcome: &Outcome) -> Result<Vec<Outputs>, String> {
+    let eq = Equations::new(&problem.scene, 0.0, 0.0).map_err(|e| e.to_string())?;
+    let law = problem.scene.law;
+    Ok(problem
+        .grid
+        .iter()
+        .zip(outcome.states.rows())
+        .map(|(&t, x)| eq.kinematics(t, law.piece_from(t), x).outputs(eq.model()))
+        .collect())
+}
+
+/// [`Equations`] on a piece of φ as a system of N states for CVODE.
+#[derive(Clone, Copy)]
+struct EquationsSystem<'a, const N: usize> {
+    eq: &'a Equations,
+    piece: PhiPiece,
+}
+
+impl<const N: usize> OdeSystem<Const<N>> for EquationsSystem<'_, N> {
+    fn rhs(&self, t: f64, y: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut f = SVector::<f64, N>::zeros();
+        self.eq.derivatives(t, self.piece, y.as_slice(), f.as_mut_slice());
+        f
+    }
 }
 
 /// [`solve`] with its arguments, for [`with_system_in`].
@@ -348,7 +405,8 @@ impl WithSystem for Cvode<'_> {
         S: OdeSystem<Const<N>> + Copy,
         F: Fn(PhiPiece) -> S,
     {
-        solve(self.api, self.problem, self.rtol, self.options, system, y0)
+        let width = state_names(self.problem.scene.formulation).len();
+        solve(self.api, self.problem, self.rtol, self.options, width, system, y0)
     }
 }
 
@@ -606,6 +664,7 @@ fn solve<S, const N: usize>(
     problem: &Problem,
     rtol: f64,
     options: Options,
+    width: usize,
     system: impl Fn(PhiPiece) -> S,
     y0: SVector<f64, N>,
 ) -> Result<Outcome, String>
@@ -709,8 +768,7 @@ where
     s.check(unsafe { (api.set_stop_time)(s.mem, stop) }, "CVodeSetStopTime", &log)?;
 
     let mut work = Work::default();
-    let mut states = States::with_capacity(problem.grid.len())
-        .leading(state_names(problem.scene.formulation).len());
+    let mut states = States::with_capacity(problem.grid.len()).leading(width);
     let row = |t: f64, y: SVector<f64, N>, data: &UserData<S>| -> SVector<f64, N> {
         // The driver's outputs are projected too (`DaeSystem::outputs`).
         data.system.get().project(t, &y).unwrap_or(y)

@@ -13,6 +13,10 @@
 //! resolve): its energy at t_end against its reference's; after the turn the undamped model
 //! conserves it.
 //!
+//! CVODE (its BDF, dense, atol 1e-3·rtol) on the exact beam through the equations that Model
+//! Exchange exports (`cvode::run_equations`): the peer the issue names, compared at equal
+//! integration error against the same reference as Radau.
+//!
 //! Timing: one untimed run of each case (its outputs and counters), then R rounds (3; 2 with
 //! `--quick`) of every case in a shuffled order, each recording the tip's states on the grid
 //! (`ours`, as the benchmark's other solvers); the median per case.
@@ -23,10 +27,10 @@ use std::time::Instant;
 use beam_body::model::{BeamModel, Formulation, Outputs};
 use beam_body::scene::IntegratorChoice;
 use beam_body::sim::Scene;
-use beam_body::solver::Stats;
+use beam_body::solver::Method;
 
 use super::problem::{on_grid, read_scene, Problem};
-use super::{ours, shuffle};
+use super::{cvode, ours, shuffle};
 use crate::{project_root, Mode, Result};
 
 /// One case: the paper's model (`elements` 0) or the exact beam in `elements`, one integrator,
@@ -34,15 +38,34 @@ use crate::{project_root, Mode, Result};
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Case {
     elements: usize,
-    integrator: IntegratorChoice,
+    solver: Solver,
     rtol: f64,
+}
+
+/// Who integrates: our BDF, our Radau IIA, or CVODE (its BDF, dense, through the equations
+/// Model Exchange exports, atol 1e-3·rtol).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Solver {
+    Bdf,
+    Radau,
+    Cvode,
+}
+
+impl Solver {
+    fn name(self) -> &'static str {
+        match self {
+            Solver::Bdf => Method::Bdf.name(),
+            Solver::Radau => Method::Radau.name(),
+            Solver::Cvode => "CVODE",
+        }
+    }
 }
 
 impl Case {
     fn label(&self) -> String {
         match self.elements {
             0 => "the paper's model (bdf)".to_string(),
-            n => format!("exact, {n} ({})", self.integrator.method(BeamModel::Exact, false).name()),
+            n => format!("exact, {n} ({})", self.solver.name()),
         }
     }
 }
@@ -56,6 +79,8 @@ struct Plan {
     /// The exact beam with the BDF: (n, rtol), where it is affordable (its steps follow the
     /// highest element mode: n = 8 takes 226,000 at any rtol).
     bdf: Vec<(usize, f64)>,
+    /// CVODE on the exact beam: (n, rtol), n of 4, 8 or 16 among `elements`.
+    cvode: Vec<(usize, f64)>,
     /// The references' rtol for n and fewer elements, and for more.
     reference_rtol: (usize, f64, f64),
     rounds: usize,
@@ -64,9 +89,10 @@ struct Plan {
 fn plan(mode: Mode) -> Plan {
     match mode {
         Mode::Full => Plan {
-            elements: vec![2, 8, 32],
+            elements: vec![2, 8, 16, 32],
             rtols: (2..=8).map(|k| 10f64.powi(-k)).collect(),
             bdf: vec![(2, 1e-2), (2, 1e-3), (2, 1e-4), (2, 1e-6), (2, 1e-8), (8, 1e-6)],
+            cvode: vec![(8, 1e-4), (8, 1e-6), (16, 1e-4), (16, 1e-6)],
             reference_rtol: (8, 1e-10, 1e-9),
             rounds: 3,
         },
@@ -74,6 +100,7 @@ fn plan(mode: Mode) -> Plan {
             elements: vec![2, 8],
             rtols: vec![1e-3, 1e-4, 1e-6],
             bdf: vec![(2, 1e-3), (2, 1e-6)],
+            cvode: vec![(8, 1e-4)],
             reference_rtol: (8, 1e-9, 1e-9),
             rounds: 2,
         },
@@ -95,11 +122,20 @@ fn problem(elements: usize) -> Result<Problem> {
 /// What an untimed run gives: the outputs on the grid and the counters.
 struct Trajectory {
     rows: Vec<Outputs>,
-    stats: Stats,
+    steps: u64,
 }
 
 /// A run of `case` recording every output on the grid (the CLI's driver, `Run`).
-fn trajectory(problem: &Problem, integrator: IntegratorChoice, rtol: f64) -> Result<Trajectory> {
+fn trajectory(problem: &Problem, solver: Solver, rtol: f64) -> Result<Trajectory> {
+    let integrator = match solver {
+        Solver::Bdf => IntegratorChoice::Bdf,
+        Solver::Radau => IntegratorChoice::Radau,
+        Solver::Cvode => {
+            let o = cvode::run_equations(problem, rtol)?;
+            let rows = cvode::outputs_of(problem, &o)?;
+            return Ok(Trajectory { rows, steps: o.counters.steps.unwrap_or(0) });
+        }
+    };
     let mut scene: Scene = problem.scene.clone();
     scene.solver.rtol = rtol;
     scene.solver.integrator = integrator;
@@ -108,7 +144,7 @@ fn trajectory(problem: &Problem, integrator: IntegratorChoice, rtol: f64) -> Res
         rows.push(run.outputs_at(t)?);
         Ok(())
     })?;
-    Ok(Trajectory { rows, stats })
+    Ok(Trajectory { rows, steps: stats.steps })
 }
 
 /// An output compared: its name and value.
@@ -158,6 +194,12 @@ struct Point {
 pub fn run(mode: Mode) -> Result {
     let plan = plan(mode);
     let started = Instant::now();
+    if !plan.cvode.is_empty() && std::env::var_os(super::CVODE_LIB_VARIABLE).is_none() {
+        if let Some(lib) = super::optimized_cvode() {
+            // Before the first CVODE call loads it; nothing else runs yet.
+            std::env::set_var(super::CVODE_LIB_VARIABLE, lib);
+        }
+    }
     let beam_n = *plan.elements.last().expect("at least one element count");
     // The references, one per n, shared by every integrator.
     let mut references = Vec::new();
@@ -165,29 +207,32 @@ pub fn run(mode: Mode) -> Result {
         let rtol =
             if n <= plan.reference_rtol.0 { plan.reference_rtol.1 } else { plan.reference_rtol.2 };
         let t = Instant::now();
-        let reference = trajectory(&problem(n)?, IntegratorChoice::Radau, rtol)?;
+        let reference = trajectory(&problem(n)?, Solver::Radau, rtol)?;
         eprintln!(
             "bench-exact: reference n = {n}, radau at rtol {rtol:e}: {} steps, {:.1} s",
-            reference.stats.steps,
+            reference.steps,
             t.elapsed().as_secs_f64()
         );
         references.push((n, rtol, reference));
     }
     // The BDF's reference for the smallest n: how far the two integrators' references agree.
     let (n0, rtol0, ref0) = &references[0];
-    let check = trajectory(&problem(*n0)?, IntegratorChoice::Bdf, *rtol0)?;
+    let check = trajectory(&problem(*n0)?, Solver::Bdf, *rtol0)?;
     let agreement = errors(&check.rows, &ref0.rows)[0];
     let beam = &references.last().expect("a reference").2.rows;
 
     let mut cases = Vec::new();
     for &rtol in &plan.rtols {
-        cases.push(Case { elements: 0, integrator: IntegratorChoice::Bdf, rtol });
+        cases.push(Case { elements: 0, solver: Solver::Bdf, rtol });
         for &n in &plan.elements {
-            cases.push(Case { elements: n, integrator: IntegratorChoice::Radau, rtol });
+            cases.push(Case { elements: n, solver: Solver::Radau, rtol });
         }
     }
     for &(elements, rtol) in &plan.bdf {
-        cases.push(Case { elements, integrator: IntegratorChoice::Bdf, rtol });
+        cases.push(Case { elements, solver: Solver::Bdf, rtol });
+    }
+    for &(elements, rtol) in &plan.cvode {
+        cases.push(Case { elements, solver: Solver::Cvode, rtol });
     }
     let problems: Vec<(usize, Problem)> = std::iter::once(0)
         .chain(plan.elements.iter().copied())
@@ -198,7 +243,7 @@ pub fn run(mode: Mode) -> Result {
     let mut points = Vec::new();
     for &case in &cases {
         let own = references.iter().find(|(n, _, _)| *n == case.elements);
-        let point = match trajectory(problem_of(case.elements), case.integrator, case.rtol) {
+        let point = match trajectory(problem_of(case.elements), case.solver, case.rtol) {
             Ok(tr) => {
                 let own = own.map_or(&tr.rows, |(_, _, r)| &r.rows);
                 let energy_end = |r: &[Outputs]| r.last().map_or(f64::NAN, |o| o.energy);
@@ -208,7 +253,7 @@ pub fn run(mode: Mode) -> Result {
                     beam: errors(&tr.rows, beam),
                     peaks: [peak_change(&tr.rows, own, 2), peak_change(&tr.rows, own, 3)],
                     energy_lost: energy_end(own) - energy_end(&tr.rows),
-                    steps: tr.stats.steps,
+                    steps: tr.steps,
                     seconds: f64::NAN,
                     failure: None,
                 }
@@ -243,7 +288,12 @@ pub fn run(mode: Mode) -> Result {
         for k in order {
             let case = cases[k];
             let t = Instant::now();
-            let o = ours::with_integrator(problem_of(case.elements), case.integrator, case.rtol)?;
+            let problem = problem_of(case.elements);
+            let o = match case.solver {
+                Solver::Bdf => ours::with_integrator(problem, IntegratorChoice::Bdf, case.rtol),
+                Solver::Radau => ours::with_integrator(problem, IntegratorChoice::Radau, case.rtol),
+                Solver::Cvode => cvode::run_equations(problem, case.rtol),
+            }?;
             times[k].push(t.elapsed().as_secs_f64());
             std::hint::black_box(o);
         }
@@ -259,7 +309,7 @@ pub fn run(mode: Mode) -> Result {
         mode,
         rounds: plan.rounds,
         seconds: started.elapsed().as_secs_f64(),
-        references: references.iter().map(|(n, r, t)| (*n, *r, t.stats.steps)).collect(),
+        references: references.iter().map(|(n, r, t)| (*n, *r, t.steps)).collect(),
         agreement,
         beam_n,
     };
@@ -365,21 +415,18 @@ fn report(points: &[Point], h: &Header) -> String {
 
 /// The issue's goals this benchmark measures, each with its figure and verdict.
 fn goals(points: &[Point]) -> Vec<String> {
-    let find = |n: usize, i: IntegratorChoice, rtol: f64| {
+    let find = |n: usize, i: Solver, rtol: f64| {
         points.iter().find(|p| {
-            p.case.elements == n
-                && p.case.integrator == i
-                && p.case.rtol == rtol
-                && p.failure.is_none()
+            p.case.elements == n && p.case.solver == i && p.case.rtol == rtol && p.failure.is_none()
         })
     };
     let verdict = |ok: bool| if ok { "**holds**" } else { "**does not hold**" };
-    let radau = IntegratorChoice::Radau;
+    let radau = Solver::Radau;
     let mut out = Vec::new();
     // Steps within 1.5× across n at rtol 1e-6.
     let steps: Vec<(usize, u64)> = points
         .iter()
-        .filter(|p| p.case.elements > 0 && p.case.integrator == radau && p.case.rtol == 1e-6)
+        .filter(|p| p.case.elements > 0 && p.case.solver == radau && p.case.rtol == 1e-6)
         .filter(|p| p.failure.is_none())
         .map(|p| (p.case.elements, p.steps))
         .collect();
@@ -397,11 +444,11 @@ fn goals(points: &[Point]) -> Vec<String> {
     // The exact beam in 8 elements within 1e-4 of the beam, at most 100× the paper's model.
     let cheapest = points
         .iter()
-        .filter(|p| p.case.elements == 8 && p.case.integrator == radau && p.failure.is_none())
+        .filter(|p| p.case.elements == 8 && p.case.solver == radau && p.failure.is_none())
         .filter(|p| p.beam[0] <= 1e-4)
         .max_by(|a, b| a.case.rtol.total_cmp(&b.case.rtol));
     if let Some(p) = cheapest {
-        let paper = find(0, IntegratorChoice::Bdf, p.case.rtol);
+        let paper = find(0, Solver::Bdf, p.case.rtol);
         if let Some(paper) = paper {
             let ratio = p.seconds / paper.seconds;
             out.push(format!(
@@ -425,6 +472,52 @@ fn goals(points: &[Point]) -> Vec<String> {
             verdict(p.seconds < 5.0)
         ));
     }
+    // At most half CVODE's time at CVODE's error, against the same reference.
+    let mut cvode_ns: Vec<usize> =
+        points.iter().filter(|p| p.case.solver == Solver::Cvode).map(|p| p.case.elements).collect();
+    cvode_ns.dedup();
+    for n in cvode_ns {
+        let mut ratios = Vec::new();
+        let mut worst: f64 = 0.0;
+        for c in points.iter().filter(|p| p.case.elements == n && p.case.solver == Solver::Cvode) {
+            if c.failure.is_some() {
+                ratios.push(format!("rtol {:.0e}: CVODE failed", c.case.rtol));
+                continue;
+            }
+            let best = points
+                .iter()
+                .filter(|p| p.case.elements == n && p.case.solver == radau && p.failure.is_none())
+                .filter(|p| p.integration[0] <= c.integration[0])
+                .min_by(|a, b| a.seconds.total_cmp(&b.seconds));
+            match best {
+                Some(r) => {
+                    let ratio = r.seconds / c.seconds;
+                    worst = worst.max(ratio);
+                    ratios.push(format!(
+                        "CVODE at rtol {:.0e} ({:.1e}, {:.0} ms): Radau at rtol {:.0e} ({:.1e}, \
+                         {:.1} ms), {:.3}×",
+                        c.case.rtol,
+                        c.integration[0],
+                        1e3 * c.seconds,
+                        r.case.rtol,
+                        r.integration[0],
+                        1e3 * r.seconds,
+                        ratio
+                    ));
+                }
+                None => {
+                    worst = f64::INFINITY;
+                    ratios.push(format!("rtol {:.0e}: no Radau run as accurate", c.case.rtol));
+                }
+            }
+        }
+        out.push(format!(
+            "n = {n}: Radau's time at CVODE's integration error of v1 (the same reference), at \
+             most 0.5× CVODE's: {}: {}.",
+            ratios.join("; "),
+            verdict(worst <= 0.5)
+        ));
+    }
     // Error falls with rtol, at every n.
     let ns: Vec<usize> = {
         let mut ns: Vec<usize> =
@@ -435,7 +528,7 @@ fn goals(points: &[Point]) -> Vec<String> {
     };
     for n in ns {
         let all: Vec<&Point> =
-            points.iter().filter(|p| p.case.elements == n && p.case.integrator == radau).collect();
+            points.iter().filter(|p| p.case.elements == n && p.case.solver == radau).collect();
         let failed = all.iter().filter(|p| p.failure.is_some()).count();
         let mut series: Vec<&Point> = all.into_iter().filter(|p| p.failure.is_none()).collect();
         series.sort_by(|a, b| b.case.rtol.total_cmp(&a.case.rtol));
@@ -459,10 +552,9 @@ mod tests {
     use super::*;
 
     fn point(elements: usize, rtol: f64, steps: u64, error: f64, seconds: f64) -> Point {
-        let integrator =
-            if elements == 0 { IntegratorChoice::Bdf } else { IntegratorChoice::Radau };
+        let solver = if elements == 0 { Solver::Bdf } else { Solver::Radau };
         Point {
-            case: Case { elements, integrator, rtol },
+            case: Case { elements, solver, rtol },
             integration: [error; 4],
             beam: [error; 4],
             peaks: [0.0; 2],
@@ -485,8 +577,15 @@ mod tests {
             point(2, 1e-6, 6000, 2e-6, 0.05),
             point(8, 1e-6, 8000, 4e-7, 0.3),
         ];
+        let mut cvode = point(8, 1e-4, 200_000, 5e-7, 2.0);
+        cvode.case.solver = Solver::Cvode;
+        points.push(cvode);
         let text = goals(&points).join("\n");
         assert!(text.contains("(ratio 1.33): **holds**"), "{text}");
+        assert!(
+            text.contains("Radau at rtol 1e-6 (4.0e-7, 300.0 ms), 0.150×: **holds**"),
+            "{text}"
+        );
         assert!(
             text.contains("in 50× the paper's model's time") && text.contains("100×: **holds**")
         );
@@ -494,7 +593,9 @@ mod tests {
         points[5].steps = 9001;
         points[3].seconds = 0.2;
         points[4].integration[0] = 3e-4;
+        points[6].seconds = 0.5;
         let text = goals(&points).join("\n");
+        assert!(text.contains("0.600×: **does not hold**"), "{text}");
         assert!(text.contains("(ratio 1.50): **does not hold**"), "{text}");
         assert!(text.contains("in 200× the paper's model's time"), "{text}");
         assert!(
