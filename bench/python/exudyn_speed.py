@@ -10,8 +10,9 @@ EXUDYN's floor). What this measures:
 1. One reference for both codes: the converged exact beam, ours `--beam exact --elements 32 --rtol 1e-9`
    (Radau IIA), on the paper's scene (scenes/paper.toml: φ_end = π, t_rot = 0.85 s, t_end = 10.2 s).
    Beside it, EXUDYN's own converged run (tests/python/peers/exudyn_beam.py, hinge="revolute": 16 ANCF
-   cable elements, EA 1e8, fixed-step generalized-α at 6.25e-5 s), whose distance from the reference is
-   EXUDYN's floor: the extensible penalty beam and its discretisation, which no step removes.
+   cable elements, EA 1e8, fixed-step generalized-α at 6.25e-5 s, Newton to 1e-12), whose distance from
+   the reference is the two models' difference (the extensible penalty beam and its discretisation), which
+   no step removes; the ladder's EXUDYN runs stop Newton at 1e-8 m and rad (LADDER_NEWTON_TOL).
 2. A ladder of runs of each code: ours n = 2, 4, 8, 16 at rtol 1e-3 .. 1e-6 (the default integrator,
    Radau IIA for the exact beam); EXUDYN n = 4, 8, 16 at steps 4e-3 .. 2.5e-4 s, with EA 1e8 and, for
    n = 4, 8 (where the penalty locks), 1e7. Each run's error is max |v1 − v1_ref| on the 4 ms grid (a
@@ -82,10 +83,16 @@ def cli_run(binary: Path, n: int, rtol: float, t_end: float) -> tuple[np.ndarray
     return data[:, 0], data[:, 1], float(m.group(1)) / 1e3, wall_process, f"{steps.group(1) if steps else '?'} steps"
 
 
-def exu_run(n: int, dt: float, EA: float, t_end: float, t_out: np.ndarray):
+# EXUDYN's Newton on the ladder stops at increments of 1e-8 m and rad (1.7e-8 of the peak, far below
+# every error asked here); the peer's default, 1e-12, is for its converged run, and would cost the
+# ladder iterations that buy no accuracy at these errors.
+LADDER_NEWTON_TOL = 1e-8
+
+
+def exu_run(n: int, dt: float, EA: float, t_end: float, t_out: np.ndarray, newton_tol: float = LADDER_NEWTON_TOL):
     """One EXUDYN run: (v1 on t_out, SolveDynamic wall s, whole call wall s, note)."""
     t0 = time.perf_counter()
-    r = peer.simulate(n, t_end=t_end, dt=dt, EA=EA, t_out=t_out, hinge="revolute")
+    r = peer.simulate(n, t_end=t_end, dt=dt, EA=EA, t_out=t_out, hinge="revolute", newton_tol=newton_tol)
     return r.v1, r.solve_s, time.perf_counter() - t0, f"{round(t_end / dt)} steps"
 
 
@@ -140,11 +147,12 @@ def main(argv=None) -> int:
     say(f"- The reference: ours, exact n={args.ref_n} rtol {args.ref_rtol:g}: integration {w:.1f} s, process "
         f"{time.perf_counter() - t0:.1f} s ({note}); peak |v1| {peak:.4f} m. Errors below are max |Δv1| over it.")
     if not quick:
-        exu_ref, ws, wt, note = exu_run(16, 6.25e-5, 1e8, t_end, t_out)
+        exu_ref, ws, wt, note = exu_run(16, 6.25e-5, 1e8, t_end, t_out, newton_tol=1e-12)
         floor = errors(exu_ref, ref, t_out, quick)
-        say(f"- EXUDYN's own converged run (n=16 dt 6.25e-5 EA 1e8; SolveDynamic {ws:.1f} s, {note}) is "
-            + ", ".join(f"{v:.1e} over [0, {k}]" for k, v in floor.items())
-            + " from the reference: its floor.")
+        say(f"- EXUDYN's own converged run (n=16 dt 6.25e-5 EA 1e8, Newton to 1e-12; SolveDynamic {ws:.1f} s, "
+            f"{note}) is " + ", ".join(f"{v:.1e} over [0, {k}]" for k, v in floor.items())
+            + " from the reference: the two models' difference (EXUDYN's extensible penalty beam in 16 "
+            "elements), near which a coarser EXUDYN run's errors can partly cancel.")
 
     # 2. the ladders
     if quick:
@@ -207,7 +215,7 @@ def main(argv=None) -> int:
             for measure in ("int", "all"):
                 for code in ("ours", "exudyn"):
                     ok = [(statistics.median(r[measure]), spec) for (c, spec), r in rows.items()
-                          if c == code and r["int"] and r["err"][span] <= thr]
+                          if c == code and r["int"] and r["note"] != "failed" and r["err"][span] <= thr]
                     best[(code, measure)] = min(ok) if ok else None
             if best[("ours", "int")] is None or best[("exudyn", "int")] is None:
                 missing = [c for c in ("ours", "exudyn") if best[(c, "int")] is None]

@@ -40,7 +40,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr;
 use std::sync::OnceLock;
 
-use beam_body::model::{Outputs, PhiPiece};
+use beam_body::model::{Outputs, Phi, PhiPiece};
 use beam_body::sim::Equations;
 use beam_body::solver::OdeSystem;
 use libloading::Library;
@@ -363,15 +363,19 @@ pub fn run_equations(problem: &Problem, rtol: f64) -> Result<Outcome, String> {
 }
 
 /// The outputs (the CLI's) of the states [`run_equations`] recorded on the problem's grid;
-/// each time with the piece of φ from it.
+/// at the law's breakpoint the turn's piece, as our driver's row there (it changes pieces
+/// past it): φ″ jumps there, and with it the accelerations and the loads.
 pub fn outputs_of(problem: &Problem, outcome: &Outcome) -> Result<Vec<Outputs>, String> {
     let eq = Equations::new(&problem.scene, 0.0, 0.0).map_err(|e| e.to_string())?;
-    let law = problem.scene.law;
+    let bp = problem.scene.law.breakpoint();
     Ok(problem
         .grid
         .iter()
         .zip(outcome.states.rows())
-        .map(|(&t, x)| eq.kinematics(t, law.piece_from(t), x).outputs(eq.model()))
+        .map(|(&t, x)| {
+            let piece = eq.piece(t, t > bp, Phi::default());
+            eq.kinematics(t, piece, x).outputs(eq.model())
+        })
         .collect())
 }
 
@@ -867,5 +871,32 @@ mod tests {
             assert!(c.steps.unwrap() > 100 && c.lu_factorizations.unwrap() > 0);
             assert!(c.rhs_evals.unwrap() > c.steps.unwrap() && c.jac_evals.unwrap() > 0);
         }
+    }
+
+    /// CVODE through the equations Model Exchange exports (`run_equations`, every state kept,
+    /// `outputs_of`) on the exact beam in 4 elements against our driver's outputs (Radau) at a
+    /// tight rtol: v1 and the hinge moment M, the row at t_rot included (φ″ jumps there).
+    #[test]
+    #[ignore = "needs CVODE (BEAM_BODY_CVODE_LIB): cargo xtask test builds it and runs this"]
+    fn cvode_through_the_equations_agrees_with_our_driver_on_the_exact_beam() {
+        describe().expect("the CVODE library loads");
+        let mut p = problem("paper").unwrap();
+        p.scene.params.beam = beam_body::model::BeamModel::Exact;
+        p.scene.params.n_elements = 4;
+        let out = run_equations(&p, 1e-9).unwrap();
+        let rows = outputs_of(&p, &out).unwrap();
+        let mut scene = p.scene.clone();
+        scene.solver.rtol = 1e-9;
+        let mut ours = Vec::new();
+        simulate(&scene, |o| ours.push(o.clone())).unwrap();
+        assert_eq!(rows.len(), ours.len());
+        let peak = |f: fn(&Outputs) -> f64| ours.iter().map(|o| f(o).abs()).fold(0.0, f64::max);
+        let diff = |f: fn(&Outputs) -> f64| {
+            rows.iter().zip(&ours).map(|(a, b)| (f(a) - f(b)).abs()).fold(0.0, f64::max)
+        };
+        let (v1, m) = (|o: &Outputs| o.v1, |o: &Outputs| o.reactions.m);
+        let (dv, dm) = (diff(v1) / peak(v1), diff(m) / peak(m));
+        eprintln!("exact, 4 elements: v1 {dv:.2e}, M {dm:.2e} of their peaks");
+        assert!(dv < 1e-6 && dm < 1e-4, "v1 {dv:e}, M {dm:e}");
     }
 }

@@ -50,7 +50,10 @@ starts. A closed stdout (`| head`) stops the run at once.
 
 {}{}",
             outputs_header(),
-            options_help(&[("-o, --output FILE", "write the CSV to FILE instead of stdout")]),
+            options_help(&[(
+                "-o, --output FILE",
+                "write the CSV to FILE instead of stdout (-: stdout)"
+            )]),
             settings_help()
         ),
         "modes" => format!(

@@ -50,8 +50,9 @@ fn suffixed(path: &Path, suffix: &str) -> PathBuf {
 }
 
 impl Output {
-    /// Where the rows go: `path`, or standard output.
+    /// Where the rows go: `path`, or standard output (no path, or `-` as Unix tools read it).
     pub fn open(path: Option<&str>) -> Result<Output, Failure> {
+        let path = path.filter(|p| *p != "-");
         let create = |p: &Path, shown: &str| {
             File::create(p).map_err(|e| Failure::Usage(format!("cannot create {shown}: {e}")))
         };

@@ -32,7 +32,7 @@ options:
   --quiet, -q         no progress or summary on stderr
   --plan              check the study and print, as JSON, its number of cases, its
                       columns, its base scene and its fingerprint; run nothing
-  -o, --output FILE   write the CSV to FILE
+  -o, --output FILE   write the CSV to FILE (-: stdout)
   -h, --help          this text
 ";
 

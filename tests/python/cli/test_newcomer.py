@@ -157,6 +157,15 @@ def test_a_failed_run_keeps_its_rows_apart_and_a_good_one_replaces_the_file(beam
     assert link.is_symlink() and read_csv(target.read_text())["t"][-1] == 0.1
 
 
+def test_a_dash_for_the_output_is_standard_output(beam_body, tmp_path):
+    """`-o -` wrote a file named "-" (one was once committed into the repository by a test)."""
+    proc = subprocess.run([str(beam_body), "simulate", str(PAPER), "--set", "t_end=0.1", "-o", "-"],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert read_csv(proc.stdout)["t"][-1] == 0.1
+    assert list(tmp_path.iterdir()) == []
+
+
 # ----- 6. Ctrl-C and SIGTERM keep the rows computed -------------------------------------------------
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
