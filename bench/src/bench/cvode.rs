@@ -888,7 +888,7 @@ mod tests {
         let mut scene = p.scene.clone();
         scene.solver.rtol = 1e-9;
         let mut ours = Vec::new();
-        simulate(&scene, |o| ours.push(o.clone())).unwrap();
+        simulate(&scene, |o| ours.push(*o)).unwrap();
         assert_eq!(rows.len(), ours.len());
         let peak = |f: fn(&Outputs) -> f64| ours.iter().map(|o| f(o).abs()).fold(0.0, f64::max);
         let diff = |f: fn(&Outputs) -> f64| {
