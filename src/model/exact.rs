@@ -136,6 +136,9 @@ fn global(e: usize, a: usize) -> Option<usize> {
     (2 * e + a).checked_sub(2)
 }
 
+/// A Gauss point of the centreline: its arc length, its weight and its motion.
+pub type GaussPoint = (f64, f64, PointMotion);
+
 /// The motion of one point of the centreline: position, velocity and acceleration.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PointMotion {
@@ -530,7 +533,7 @@ impl ExactBeam {
         q: &[f64],
         qd: &[f64],
         qdd: &[f64],
-    ) -> (Vec<(f64, f64, PointMotion)>, Vec<PointMotion>) {
+    ) -> (Vec<GaussPoint>, Vec<PointMotion>) {
         let (n, h) = (self.n(), self.h());
         let Rule { a, b, c } = &self.rule;
         let mut out = Vec::with_capacity(n * P);
@@ -572,10 +575,16 @@ impl ExactBeam {
     /// The beam's kinetic and potential energies [J]: ½m Σ w_i|ṙ_i|², and ½qᵀKq with the
     /// weight's −m g_b Σ w_i (x_i − s_i) (zero for the straight beam).
     pub fn beam_energy(&self, q: &[f64], qd: &[f64]) -> (f64, f64) {
-        let m = self.params().m;
         let (points, _) = self.gauss_points(q, qd, &vec![0.0; q.len()]);
+        self.beam_energy_at(q, &points)
+    }
+
+    /// [`beam_energy`](Self::beam_energy) from the Gauss points' motion at (q, q̇)
+    /// ([`gauss_points`](Self::gauss_points), any q̈).
+    pub fn beam_energy_at(&self, q: &[f64], points: &[GaussPoint]) -> (f64, f64) {
+        let m = self.params().m;
         let (mut kinetic, mut weight) = (0.0, 0.0);
-        for (s, w, p) in points {
+        for &(s, w, p) in points {
             kinetic += 0.5 * m * w * (p.v[0] * p.v[0] + p.v[1] * p.v[1]);
             weight -= m * self.g_beam * w * (p.r[0] - s);
         }
@@ -589,8 +598,22 @@ impl ExactBeam {
     /// reactions for a rigid translation and rotation of the whole, exact for the discrete
     /// model. Of the damping, βK is internal and adds nothing; αM_b adds its resultant.
     pub fn root_loads(&self, phi: &Phi, q: &[f64], qd: &[f64], qdd: &[f64]) -> (f64, f64) {
-        let Params { m, m2, j_c, r, g, .. } = *self.params();
         let (points, nodes) = self.gauss_points(q, qd, qdd);
+        self.root_loads_at(phi, q, qd, qdd, &points, &nodes)
+    }
+
+    /// [`root_loads`](Self::root_loads) from [`gauss_points`](Self::gauss_points) at the same
+    /// (q, q̇, q̈).
+    pub fn root_loads_at(
+        &self,
+        phi: &Phi,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        points: &[GaussPoint],
+        nodes: &[PointMotion],
+    ) -> (f64, f64) {
+        let Params { m, m2, j_c, r, g, .. } = *self.params();
         let tip = nodes[nodes.len() - 1];
         let nq = q.len();
         let (st, ct) = math::sin_cos(q[nq - 1] + phi.phi);
@@ -603,7 +626,7 @@ impl ExactBeam {
         let cross = |x: [f64; 2], y: [f64; 2]| x[0] * y[1] - x[1] * y[0];
         let mut force_y = m2 * cdd[1];
         let mut moment = m2 * cross(c, cdd) + j_c * ddth + m2 * g * c[1];
-        for (_, w, p) in points {
+        for &(_, w, p) in points {
             force_y += m * w * p.a[1];
             moment += m * w * (cross(p.r, p.a) + self.g_beam * p.r[1]);
         }

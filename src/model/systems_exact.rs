@@ -94,10 +94,17 @@ impl ExactSystem<'_> {
         let phi = self.phi.eval(t);
         let mut acc = vec![0.0; nq];
         model.accelerations(&phi, q, qd, &mut acc);
-        let tip = model.tip(q, qd, &acc);
+        // One sweep of the Gauss points for the tip, the beam's energy and the root's loads,
+        // and the quarter points that are nodes (n a multiple of 4).
+        let (points, nodes) = model.gauss_points(q, qd, &acc);
+        let tip = nodes[nodes.len() - 1];
         let l = model.params().l;
-        let at = [0.25, 0.5, 0.75].map(|f| model.point(q, qd, &acc, f * l));
-        let (t1, p1) = model.beam_energy(q, qd);
+        let n = nodes.len();
+        let at = [1, 2, 3].map(|k| match k * n % 4 {
+            0 => nodes[k * n / 4 - 1],
+            _ => model.point(q, qd, &acc, k as f64 / 4.0 * l),
+        });
+        let (t1, p1) = model.beam_energy_at(q, &points);
         let tp = nq - 2;
         Kinematics {
             t,
@@ -116,7 +123,7 @@ impl ExactSystem<'_> {
             node1: [q[0], q[1], qd[0], qd[1], acc[0], acc[1]],
             quarter: [at.map(|p| p.r[1]), at.map(|p| p.v[1]), at.map(|p| p.a[1])],
             rayleigh: model.quadratic.rayleigh(),
-            root: Some(model.root_loads(&phi, q, qd, &acc)),
+            root: Some(model.root_loads_at(&phi, q, qd, &acc, &points, &nodes)),
         }
     }
 }
