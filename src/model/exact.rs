@@ -219,19 +219,17 @@ impl ExactBeam {
         let (n, h) = (self.n(), self.h());
         let Rule { a, b, .. } = &self.rule;
         // The points' accelerations r̈_i = R̈_e + h Σ_j A_ij (p_j α̈_j − e_j α̇_j²), in order.
-        let mut acc: Vec<[f64; 2]> = Vec::with_capacity(n * P);
+        // An element's P points a push (one capacity check, no index checks on reading back).
+        let mut acc: Vec<[[f64; 2]; P]> = Vec::with_capacity(n);
         let mut base = [0.0; 2];
-        for e in 0..n {
+        for (e, sections) in ang.at.chunks_exact(P).enumerate() {
             let add = self.alpha(qdd, e);
             let (mut fx, mut fy) = ([0.0; P], [0.0; P]);
-            for j in 0..P {
-                let Section { sin: s, cos: c, rate: w } = ang.at[e * P + j];
+            for (j, &Section { sin: s, cos: c, rate: w }) in sections.iter().enumerate() {
                 fx[j] = -s * add[j] - c * w * w;
                 fy[j] = c * add[j] - s * w * w;
             }
-            for a_i in a {
-                acc.push([base[0] + h * dot(a_i, &fx), base[1] + h * dot(a_i, &fy)]);
-            }
+            acc.push(a.map(|a_i| [base[0] + h * dot(&a_i, &fx), base[1] + h * dot(&a_i, &fy)]));
             base[0] += h * dot(b, &fx);
             base[1] += h * dot(b, &fy);
         }
@@ -247,12 +245,12 @@ impl ExactBeam {
         // f_i = m w_i (r̈_i − g_b e_x); R_k = Σ_j ∂α_j/∂q_k (p_j · B_j).
         out.fill(0.0);
         let mut later = tip;
-        for e in (0..n).rev() {
+        for (e, acc_e) in acc.iter().enumerate().rev() {
             let (mut fx, mut fy) = ([0.0; P], [0.0; P]);
             for i in 0..P {
                 let w = m * h * b[i];
-                fx[i] = w * (acc[e * P + i][0] - self.g_beam);
-                fy[i] = w * acc[e * P + i][1];
+                fx[i] = w * (acc_e[i][0] - self.g_beam);
+                fy[i] = w * acc_e[i][1];
             }
             for j in 0..P {
                 let (mut bx, mut by) = (h * b[j] * later[0], h * b[j] * later[1]);
