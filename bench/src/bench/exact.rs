@@ -26,7 +26,6 @@ use std::time::Instant;
 
 use beam_body::model::{BeamModel, Formulation, Outputs};
 use beam_body::scene::IntegratorChoice;
-use beam_body::sim::Scene;
 use beam_body::solver::Method;
 
 use super::problem::{on_grid, read_scene, Problem};
@@ -57,6 +56,15 @@ impl Solver {
             Solver::Bdf => Method::Bdf.name(),
             Solver::Radau => Method::Radau.name(),
             Solver::Cvode => "CVODE",
+        }
+    }
+
+    /// Ours as the `integrator` setting names it; `None` for CVODE.
+    fn ours(self) -> Option<IntegratorChoice> {
+        match self {
+            Solver::Bdf => Some(IntegratorChoice::Bdf),
+            Solver::Radau => Some(IntegratorChoice::Radau),
+            Solver::Cvode => None,
         }
     }
 }
@@ -127,18 +135,13 @@ struct Trajectory {
 
 /// A run of `case` recording every output on the grid (the CLI's driver, `Run`).
 fn trajectory(problem: &Problem, solver: Solver, rtol: f64) -> Result<Trajectory> {
-    let integrator = match solver {
-        Solver::Bdf => IntegratorChoice::Bdf,
-        Solver::Radau => IntegratorChoice::Radau,
-        Solver::Cvode => {
-            let o = cvode::run_equations(problem, rtol)?;
-            let rows = cvode::outputs_of(problem, &o)?;
-            return Ok(Trajectory { rows, steps: o.counters.steps.unwrap_or(0) });
-        }
+    let Some(integrator) = solver.ours() else {
+        let o = cvode::run_equations(problem, rtol)?;
+        let rows = cvode::outputs_of(problem, &o)?;
+        return Ok(Trajectory { rows, steps: o.counters.steps.unwrap_or(0) });
     };
-    let mut scene: Scene = problem.scene.clone();
-    scene.solver.rtol = rtol;
-    scene.solver.integrator = integrator;
+    // The scene the timed runs take (`ours::with_integrator`).
+    let scene = ours::adaptive(problem, integrator, rtol);
     let mut rows = Vec::with_capacity(problem.grid.len());
     let stats = ours::drive(problem, &scene, |run, t| {
         rows.push(run.outputs_at(t)?);
@@ -289,10 +292,9 @@ pub fn run(mode: Mode) -> Result {
             let case = cases[k];
             let t = Instant::now();
             let problem = problem_of(case.elements);
-            let o = match case.solver {
-                Solver::Bdf => ours::with_integrator(problem, IntegratorChoice::Bdf, case.rtol),
-                Solver::Radau => ours::with_integrator(problem, IntegratorChoice::Radau, case.rtol),
-                Solver::Cvode => cvode::run_equations(problem, case.rtol),
+            let o = match case.solver.ours() {
+                Some(integrator) => ours::with_integrator(problem, integrator, case.rtol),
+                None => cvode::run_equations(problem, case.rtol),
             }?;
             times[k].push(t.elapsed().as_secs_f64());
             std::hint::black_box(o);

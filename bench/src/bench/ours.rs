@@ -32,12 +32,17 @@ pub fn with_integrator(
     integrator: IntegratorChoice,
     rtol: f64,
 ) -> Result<Outcome, String> {
+    solve(problem, &adaptive(problem, integrator, rtol))
+}
+
+/// The problem's scene for our adaptive `integrator` at `rtol` with its default atol.
+pub fn adaptive(problem: &Problem, integrator: IntegratorChoice, rtol: f64) -> Scene {
     let mut scene = problem.scene.clone();
     scene.solver.rtol = rtol;
     scene.solver.atol = 0.0;
     scene.solver.fixed_step = 0.0;
     scene.solver.integrator = integrator;
-    solve(problem, &scene)
+    scene
 }
 
 /// Our BDF of order [`FIXED_ORDER`] with the constant step `h` [s].
