@@ -84,11 +84,15 @@ where
                 return None;
             }
             f[k * n + k] = inv;
-            for i in k + 1..n {
-                let m = f[i * n + k] * inv;
-                f[i * n + k] = m;
-                for j in k + 1..n {
-                    f[i * n + j] -= m * f[k * n + j];
+            // Rows below k minus multiples of row k, as slices: no index checks in the inner
+            // loop for a run-time dimension either.
+            let (upper, lower) = f.split_at_mut((k + 1) * n);
+            let pivot_row = &upper[k * n + k + 1..];
+            for row in lower.chunks_exact_mut(n) {
+                let m = row[k] * inv;
+                row[k] = m;
+                for (x, u) in row[k + 1..].iter_mut().zip(pivot_row) {
+                    *x -= m * u;
                 }
             }
         }
@@ -132,22 +136,43 @@ where
 
     /// Solves `a x = b` by forward and back substitution on the factors.
     fn substitute(&self, b: &OVector<f64, D>) -> OVector<f64, D> {
+        let mut x = b.clone();
+        self.substitute_in_place(x.as_mut_slice());
+        x
+    }
+
+    /// Solves `a x = b` in place (`b` of the matrix's dimension) by forward and back
+    /// substitution on the factors.
+    pub fn substitute_in_place(&self, b: &mut [f64]) {
         let n = self.n();
         let f = self.rows.as_slice();
-        let mut x =
-            OVector::<f64, D>::from_fn_generic(b.shape_generic().0, U1, |i, _| b[self.perm[i]]);
-        for i in 0..n {
-            for j in 0..i {
-                x[i] -= f[i * n + j] * x[j];
+        // The permuted right-hand side: on the stack up to 128 (every system here), else on
+        // the heap.
+        let (mut stack, mut heap) = ([0.0; 128], Vec::new());
+        let x = if n <= stack.len() {
+            &mut stack[..n]
+        } else {
+            heap.resize(n, 0.0);
+            &mut heap[..]
+        };
+        for (x, &p) in x.iter_mut().zip(self.perm.iter()) {
+            *x = b[p];
+        }
+        // Entry by entry in order, as the index loops did (the same bits).
+        for (i, row) in f.chunks_exact(n).enumerate() {
+            let (done, rest) = x.split_at_mut(i);
+            for (l, x) in row[..i].iter().zip(done.iter()) {
+                rest[0] -= l * x;
             }
         }
-        for i in (0..n).rev() {
-            for j in i + 1..n {
-                x[i] -= f[i * n + j] * x[j];
+        for (i, row) in f.chunks_exact(n).enumerate().rev() {
+            let (head, done) = x.split_at_mut(i + 1);
+            for (u, x) in row[i + 1..].iter().zip(done.iter()) {
+                head[i] -= u * x;
             }
-            x[i] *= f[i * n + i];
+            head[i] *= row[i];
         }
-        x
+        b.copy_from_slice(x);
     }
 
     /// A stand-in for the fields of an absent LU of dimension `d` when a state is visited:

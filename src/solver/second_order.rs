@@ -14,8 +14,9 @@
 //! an eighth of the 2m×2m one's cost.
 
 use super::band::{BandLu, GenBand};
+use super::lu::Lu;
 use super::snapshot::StateVisitor;
-use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Vector3, LU};
+use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Vector3};
 
 /// A band matrix plus u·vᵀ.
 #[derive(Clone, Debug, PartialEq)]
@@ -80,7 +81,7 @@ pub struct DenseParts {
 #[derive(Clone, Debug)]
 pub enum SecondOrderLu {
     Banded(BandedLu),
-    Dense { gamma: f64, lu: LU<f64, Dyn, Dyn> },
+    Dense { gamma: f64, lu: Lu<Dyn> },
 }
 
 impl SecondOrder {
@@ -143,8 +144,7 @@ impl SecondOrder {
                 if !t.iter().all(|x| x.is_finite()) {
                     return None;
                 }
-                let lu = t.lu();
-                lu.is_invertible().then_some(SecondOrderLu::Dense { gamma, lu })
+                Lu::factor(&t).map(|lu| SecondOrderLu::Dense { gamma, lu })
             }
         }
     }
@@ -176,13 +176,7 @@ impl SecondOrderLu {
     pub fn solve_reduced(&self, b: &mut [f64]) {
         match self {
             SecondOrderLu::Banded(lu) => lu.solve_reduced(b),
-            SecondOrderLu::Dense { lu, .. } => {
-                let x = lu.solve(&DVector::from_column_slice(b));
-                match x {
-                    Some(x) => b.copy_from_slice(x.as_slice()),
-                    None => b.fill(f64::NAN),
-                }
-            }
+            SecondOrderLu::Dense { lu, .. } => lu.substitute_in_place(b),
         }
     }
 
@@ -195,8 +189,8 @@ impl SecondOrderLu {
                 let m = p.mass.nrows();
                 let (r1, r2) = r.split_at_mut(m);
                 let (v1, v2) = (DVector::from_column_slice(r1), DVector::from_column_slice(r2));
-                let b = &p.mass * v2 - &p.stiffness * v1 * *gamma;
-                let dv = lu.solve(&b).unwrap_or_else(|| DVector::from_element(m, f64::NAN));
+                let mut dv = &p.mass * v2 - &p.stiffness * v1 * *gamma;
+                lu.substitute_in_place(dv.as_mut_slice());
                 for ((x, v), d) in r1.iter_mut().zip(r2.iter_mut()).zip(dv.iter()) {
                     *x += gamma * d;
                     *v = *d;

@@ -54,7 +54,7 @@ where
         };
         let stage = || -> [Stage; 3] { std::array::from_fn(|_| vec![0.0; m]) };
         let mut zv: [Stage; 3] = std::array::from_fn(|i| z[i].as_slice()[m..].to_vec());
-        let (mut w, mut d, mut scratch) = (stage(), stage(), Vec::with_capacity(m));
+        let (mut w, mut d) = (stage(), stage());
         mix(&TI, &zv, &mut w);
         let (mut x, mut v, mut acc, mut res) =
             (vec![0.0; m], vec![0.0; m], vec![0.0; m], [vec![0.0; m], vec![0.0; m], vec![0.0; m]]);
@@ -84,7 +84,7 @@ where
             mix(&TI, &res, &mut d);
             let [d0, d1, d2] = &mut d;
             factors.solve_reduced_real(d0)?;
-            factors.solve_reduced_complex(d1, d2, &mut scratch)?;
+            factors.solve_reduced_complex(d1, d2)?;
             let n = (d
                 .iter()
                 .flat_map(|d| d.iter().zip(wv).map(|(x, w)| (x / w) * (x / w)))

@@ -379,7 +379,7 @@ where
             let mut d1 = &tf[1] - &w[1] * mu_a - &w[2] * mu_b;
             let mut d2 = &tf[2] + &w[1] * mu_b - &w[2] * mu_a;
             factors.solve_real(jac, &mut d0);
-            factors.solve_complex(&mut d1, &mut d2);
+            factors.solve_complex(jac, &mut d1, &mut d2);
             let n =
                 [&d0, &d1, &d2].map(|d| rms(d, &w_scale)).iter().map(|r| r * r).sum::<f64>().sqrt()
                     / 3f64.sqrt();
