@@ -146,8 +146,8 @@ where
     pub fn substitute_in_place(&self, b: &mut [f64]) {
         let n = self.n();
         let f = self.rows.as_slice();
-        // The permuted right-hand side: on the stack up to 128 (every system here), else on
-        // the heap.
+        // The permuted right-hand side: on the stack up to 128 entries (the Newton matrices of
+        // up to 64 coordinates, and the states of the reduced forms), else on the heap.
         let (mut stack, mut heap) = ([0.0; 128], Vec::new());
         let x = if n <= stack.len() {
             &mut stack[..n]

@@ -135,7 +135,9 @@ impl SecondOrder {
         }
     }
 
-    /// The Newton matrix for `gamma` factored; `None` if it is singular.
+    /// The Newton matrix for `gamma` factored; `None` if it is singular: the banded form at
+    /// an exactly zero pivot, the dense one ([`Lu::factor`], the BDF's dense LU) also at a
+    /// pivot within m·ε of its largest entry, singular to working precision.
     pub fn factor(&self, gamma: f64) -> Option<SecondOrderLu> {
         match self {
             SecondOrder::Banded(p) => p.factor(gamma).map(SecondOrderLu::Banded),

@@ -102,12 +102,12 @@ fn plan(mode: Mode) -> Plan {
             elements: vec![2, 8, 16, 32],
             // Half decades (the work-precision protocol, numerics notes): an equal-error
             // comparison then picks a run within √10 of the error asked, not within 10.
-            rtols: (4..=16).map(half_decade).collect(),
+            rtols: (0..=12).map(|k| rtol(2, k)).collect(),
             bdf: vec![(2, 1e-2), (2, 1e-3), (2, 1e-4), (2, 1e-6), (2, 1e-8), (8, 1e-6)],
             cvode: vec![(8, 1e-4), (8, 1e-6), (16, 1e-4), (16, 1e-6)],
             // CVODE in 16 elements at rtol 1e-6 reaches 8e-10 of the peak: Radau's runs to
             // 1e-9, against a reference at 1e-10, measure that comparison.
-            radau: vec![(16, 3e-9), (16, 1e-9)],
+            radau: vec![(16, rtol(8, 1)), (16, 1e-9)],
             reference_rtol: (16, 1e-10, 1e-9),
             rounds: 3,
         },
@@ -123,14 +123,18 @@ fn plan(mode: Mode) -> Plan {
     }
 }
 
-/// The k-th half decade below 1: 10^(−k/2) for even k, 3·10^(−(k+1)/2) for odd k (3 for
-/// √10, so the rtols print short).
-fn half_decade(k: i32) -> f64 {
-    // A quotient of two exact integers is the correctly rounded literal (1e-3, 3e-4).
-    if k % 2 == 0 {
-        1.0 / 10f64.powi(k / 2)
+/// The k-th half decade below 10^(−top) ([`super::half_decade`]) as a number.
+fn rtol(top: u32, k: u32) -> f64 {
+    super::half_decade(top, k).parse().expect("the text of a number")
+}
+
+/// An rtol as the tables print it: a decade as its literal, a half decade to three digits.
+fn rtol_text(rtol: f64) -> String {
+    let text = format!("{rtol:e}");
+    if text.len() <= 6 {
+        text
     } else {
-        3.0 / 10f64.powi((k + 1) / 2)
+        format!("{rtol:.2e}")
     }
 }
 
@@ -295,9 +299,9 @@ pub fn run(mode: Mode) -> Result {
             },
         };
         eprintln!(
-            "bench-exact: {} at rtol {:e}: {} steps, v1 {:.2e} against the beam{}",
+            "bench-exact: {} at rtol {}: {} steps, v1 {:.2e} against the beam{}",
             case.label(),
-            case.rtol,
+            rtol_text(case.rtol),
             point.steps,
             point.beam[0],
             point.failure.as_deref().map_or(String::new(), |f| format!(" (failed: {f})"))
@@ -399,9 +403,9 @@ fn report(points: &[Point], h: &Header) -> String {
             let why = why.split(": the energy").next().unwrap_or(why);
             let _ = writeln!(
                 md,
-                "| {} | {:e} | failed: {why} | | | | | | | | | | | |",
+                "| {} | {} | failed: {why} | | | | | | | | | | | |",
                 c.label(),
-                c.rtol
+                rtol_text(c.rtol)
             );
             continue;
         }
@@ -413,10 +417,10 @@ fn report(points: &[Point], h: &Header) -> String {
         let own = |x: f64| if c.elements == 0 { "—".to_string() } else { format!("{x:.1e}") };
         let _ = writeln!(
             md,
-            "| {} | {:e} | {} | {:.2} | {ratio} | {} | {} | {} | {} | {:.1e} | {:.1e} | {} | {} | \
+            "| {} | {} | {} | {:.2} | {ratio} | {} | {} | {} | {} | {:.1e} | {:.1e} | {} | {} | \
              {} |",
             c.label(),
-            c.rtol,
+            rtol_text(c.rtol),
             p.steps,
             1e3 * p.seconds,
             own(p.integration[0]),
@@ -476,11 +480,11 @@ fn goals(points: &[Point]) -> Vec<String> {
         if let Some(paper) = paper {
             let ratio = p.seconds / paper.seconds;
             out.push(format!(
-                "8 elements within 1e-4 of the beam's peak of v1 ({:.1e} at rtol {:e}) in {:.0}× \
+                "8 elements within 1e-4 of the beam's peak of v1 ({:.1e} at rtol {}) in {:.0}× \
                  the paper's model's time at the same rtol ({:.2} ms against {:.3} ms), at most \
                  100×: {}.",
                 p.beam[0],
-                p.case.rtol,
+                rtol_text(p.case.rtol),
                 ratio,
                 1e3 * p.seconds,
                 1e3 * paper.seconds,
@@ -506,7 +510,7 @@ fn goals(points: &[Point]) -> Vec<String> {
         for c in points.iter().filter(|p| p.case.elements == n && p.case.solver == Solver::Cvode) {
             if c.failure.is_some() {
                 failed += 1;
-                list.push(format!("rtol {:.0e}: CVODE failed", c.case.rtol));
+                list.push(format!("rtol {}: CVODE failed", rtol_text(c.case.rtol)));
                 continue;
             }
             let best = points
@@ -516,9 +520,10 @@ fn goals(points: &[Point]) -> Vec<String> {
                 .min_by(|a, b| a.seconds.total_cmp(&b.seconds));
             let Some(r) = best else {
                 list.push(format!(
-                    "CVODE at rtol {:.0e} ({:.1e}): not measured, below Radau's tightest run \
+                    "CVODE at rtol {} ({:.1e}): not measured, below Radau's tightest run \
                      here",
-                    c.case.rtol, c.integration[0]
+                    rtol_text(c.case.rtol),
+                    c.integration[0]
                 ));
                 continue;
             };
@@ -526,12 +531,12 @@ fn goals(points: &[Point]) -> Vec<String> {
             worst = worst.max(ratio);
             measured += 1;
             list.push(format!(
-                "CVODE at rtol {:.0e} ({:.1e}, {:.0} ms): Radau at rtol {:.0e} ({:.1e}, \
+                "CVODE at rtol {} ({:.1e}, {:.0} ms): Radau at rtol {} ({:.1e}, \
                  {:.1} ms), {:.3}×",
-                c.case.rtol,
+                rtol_text(c.case.rtol),
                 c.integration[0],
                 1e3 * c.seconds,
-                r.case.rtol,
+                rtol_text(r.case.rtol),
                 r.integration[0],
                 1e3 * r.seconds,
                 ratio
@@ -561,7 +566,7 @@ fn goals(points: &[Point]) -> Vec<String> {
         let falls = series.windows(2).all(|w| w[1].integration[0] < w[0].integration[0]);
         let list: Vec<String> = series
             .iter()
-            .map(|p| format!("{:.0e}: {:.1e}", p.case.rtol, p.integration[0]))
+            .map(|p| format!("{}: {:.1e}", rtol_text(p.case.rtol), p.integration[0]))
             .collect();
         out.push(format!(
             "n = {n}, Radau: every rtol runs to the end and the integration error of v1 falls \
@@ -591,13 +596,18 @@ mod tests {
         }
     }
 
+    #[test]
+    fn rtols_run_in_half_decades_and_print_short() {
+        let rtols: Vec<f64> = (0..=3).map(|k| rtol(2, k)).collect();
+        assert_eq!(rtols[0], 1e-2);
+        assert_eq!(rtols[2], 1e-3);
+        assert!((rtols[1] / 10f64.powf(-2.5) - 1.0).abs() < 1e-15);
+        let texts: Vec<String> = rtols.iter().map(|&r| rtol_text(r)).collect();
+        assert_eq!(texts, ["1e-2", "3.16e-3", "1e-3", "3.16e-4"]);
+    }
+
     /// The verdicts follow the figures: steps within 1.5×, the price against the paper's
     /// model at the loosest rtol within 1e-4, an error that must fall with rtol.
-    #[test]
-    fn half_decades_run_from_a_decade_down() {
-        let rtols: Vec<f64> = (4..=7).map(half_decade).collect();
-        assert_eq!(rtols, vec![1e-2, 3e-3, 1e-3, 3e-4]);
-    }
 
     #[test]
     fn the_goals_say_what_the_figures_say() {

@@ -152,14 +152,14 @@ impl Case {
     }
 }
 
-/// 10^(−3 − k/2): exact decades as literals ("1e-4"), half decades as the shortest text
+/// 10^(−top − k/2): exact decades as literals ("1e-4"), half decades as the shortest text
 /// that reads back to the same double ("3.1622776601683795e-4").
-fn half_decade(k: u32) -> String {
+pub(super) fn half_decade(top: u32, k: u32) -> String {
     // Not `is_multiple_of`: the workspace's rust-version is 1.80.
     if k % 2 == 1 {
-        format!("{:e}", 10f64.powf(-3.0 - f64::from(k) / 2.0))
+        format!("{:e}", 10f64.powf(-f64::from(top) - f64::from(k) / 2.0))
     } else {
-        format!("1e-{}", 3 + k / 2)
+        format!("1e-{}", top + k / 2)
     }
 }
 
@@ -183,9 +183,9 @@ fn cases(mode: Mode) -> Vec<Case> {
     let texts = |list: &[&str]| list.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     let (tight, scipy, scipy_stiff, fixed, fmu) = match mode {
         Mode::Full => (
-            (0..23).map(half_decade).collect(),
-            (0..11).map(half_decade).collect(),
-            (0..3).map(half_decade).collect(),
+            (0..23).map(|k| half_decade(3, k)).collect(),
+            (0..11).map(|k| half_decade(3, k)).collect(),
+            (0..3).map(|k| half_decade(3, k)).collect(),
             texts(&["8.5e-4", "8.5e-5", "8.5e-6"]),
             ["1e-4", "1e-6", "1e-8"]
                 .iter()
@@ -847,7 +847,7 @@ mod tests {
 
     #[test]
     fn half_decades_read_back_exactly() {
-        let texts: Vec<String> = (0..23).map(half_decade).collect();
+        let texts: Vec<String> = (0..23).map(|k| half_decade(3, k)).collect();
         assert_eq!(texts[0], "1e-3");
         assert_eq!(texts[2], "1e-4");
         assert_eq!(texts[14], "1e-10");
