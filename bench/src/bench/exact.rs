@@ -608,7 +608,6 @@ mod tests {
 
     /// The verdicts follow the figures: steps within 1.5×, the price against the paper's
     /// model at the loosest rtol within 1e-4, an error that must fall with rtol.
-
     #[test]
     fn the_goals_say_what_the_figures_say() {
         let mut points = vec![

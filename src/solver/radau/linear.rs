@@ -52,12 +52,13 @@ fn gammas(h: f64) -> (f64, C64) {
     (h / super::tableau::MU_REAL, C64::new(h, 0.0) / mu)
 }
 
-/// The n×n matrix Σ_k c_k·A_k (complex c_k, real A_k), row by row, real and imaginary parts.
-fn combine(n: usize, terms: &[(C64, &DMatrix<f64>)]) -> (Vec<f64>, Vec<f64>) {
+/// The n×n matrix Σ_k c_k·A_k (complex c_k, real A_k given column by column, as nalgebra
+/// stores them), row by row, real and imaginary parts.
+fn combine(n: usize, terms: &[(C64, &[f64])]) -> (Vec<f64>, Vec<f64>) {
     let (mut re, mut im) = (vec![0.0; n * n], vec![0.0; n * n]);
     for (c, a) in terms {
-        // A is column-major: its column j is the j-th entry of every row.
-        for (j, col) in a.as_slice().chunks_exact(n).enumerate() {
+        // Column j holds the j-th entry of every row.
+        for (j, col) in a.chunks_exact(n).enumerate() {
             for (i, x) in col.iter().enumerate() {
                 re[i * n + j] += c.re * x;
                 im[i * n + j] += c.im * x;
@@ -93,13 +94,7 @@ where
                 let n = d.value();
                 let eye = OMatrix::<f64, D, D>::identity_generic(d, d);
                 let real = Lu::factor(&(&eye - j * gr))?;
-                let (mut re, mut im) = (vec![0.0; n * n], vec![0.0; n * n]);
-                for r in 0..n {
-                    for c in 0..n {
-                        let z = C64::new(eye[(r, c)], 0.0) - gc * j[(r, c)];
-                        (re[r * n + c], im[r * n + c]) = (z.re, z.im);
-                    }
-                }
+                let (re, im) = combine(n, &[(one, eye.as_slice()), (-gc, j.as_slice())]);
                 Some(Factors::Dense { h, real, complex: ComplexLu::factor(n, re, im)? })
             }
             Jacobian::Second(s) => {
@@ -112,7 +107,8 @@ where
                 };
                 let [mass, damping, stiffness] = parts(s, &banded);
                 let m = mass.nrows();
-                let (re, im) = combine(m, &[(one, mass), (gc, damping), (gc * gc, stiffness)]);
+                let terms = [(one, mass), (gc, damping), (gc * gc, stiffness)];
+                let (re, im) = combine(m, &terms.map(|(c, a)| (c, a.as_slice())));
                 Some(Factors::Second { h, real, complex: ComplexLu::factor(m, re, im)?, banded })
             }
         }
@@ -159,10 +155,11 @@ where
                 let m = mass.nrows();
                 let (r1, r2) = re.as_mut_slice().split_at_mut(m);
                 let (i1, i2) = im.as_mut_slice().split_at_mut(m);
+                let g1: Vec<C64> =
+                    r1.iter().zip(i1.iter()).map(|(r, i)| gc * C64::new(*r, *i)).collect();
                 let (mut dr, mut di) = (vec![0.0; m], vec![0.0; m]);
                 for i in 0..m {
-                    for j in 0..m {
-                        let g1 = gc * C64::new(r1[j], i1[j]);
+                    for (j, g1) in g1.iter().enumerate() {
                         dr[i] += mass[(i, j)] * r2[j] - stiffness[(i, j)] * g1.re;
                         di[i] += mass[(i, j)] * i2[j] - stiffness[(i, j)] * g1.im;
                     }
