@@ -143,11 +143,10 @@ where
 
     /// Solves `a x = b` in place (`b` of the matrix's dimension) by forward and back
     /// substitution on the factors.
-    pub fn substitute_in_place(&self, b: &mut [f64]) {
+    fn substitute_in_place(&self, b: &mut [f64]) {
         let n = self.n();
         let f = self.rows.as_slice();
-        // The permuted right-hand side: on the stack up to 128 entries (the Newton matrices of
-        // up to 64 coordinates, and the states of the reduced forms), else on the heap.
+        // The permuted right-hand side: on the stack up to 128 entries, else on the heap.
         let (mut stack, mut heap) = ([0.0; 128], Vec::new());
         let x = if n <= stack.len() {
             &mut stack[..n]

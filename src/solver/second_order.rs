@@ -14,9 +14,8 @@
 //! an eighth of the 2m×2m one's cost.
 
 use super::band::{BandLu, GenBand};
-use super::lu::Lu;
 use super::snapshot::StateVisitor;
-use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Vector3, LU};
 
 /// A band matrix plus u·vᵀ.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,7 +80,7 @@ pub struct DenseParts {
 #[derive(Clone, Debug)]
 pub enum SecondOrderLu {
     Banded(BandedLu),
-    Dense { gamma: f64, lu: Lu<Dyn> },
+    Dense { gamma: f64, lu: LU<f64, Dyn, Dyn> },
 }
 
 impl SecondOrder {
@@ -135,9 +134,7 @@ impl SecondOrder {
         }
     }
 
-    /// The Newton matrix for `gamma` factored; `None` if it is singular: the banded form at
-    /// an exactly zero pivot, the dense one ([`Lu::factor`], the BDF's dense LU) also at a
-    /// pivot within m·ε of its largest entry, singular to working precision.
+    /// The Newton matrix for `gamma` factored; `None` if it is singular.
     pub fn factor(&self, gamma: f64) -> Option<SecondOrderLu> {
         match self {
             SecondOrder::Banded(p) => p.factor(gamma).map(SecondOrderLu::Banded),
@@ -146,7 +143,8 @@ impl SecondOrder {
                 if !t.iter().all(|x| x.is_finite()) {
                     return None;
                 }
-                Lu::factor(&t).map(|lu| SecondOrderLu::Dense { gamma, lu })
+                let lu = t.lu();
+                lu.is_invertible().then_some(SecondOrderLu::Dense { gamma, lu })
             }
         }
     }
@@ -178,7 +176,13 @@ impl SecondOrderLu {
     pub fn solve_reduced(&self, b: &mut [f64]) {
         match self {
             SecondOrderLu::Banded(lu) => lu.solve_reduced(b),
-            SecondOrderLu::Dense { lu, .. } => lu.substitute_in_place(b),
+            SecondOrderLu::Dense { lu, .. } => {
+                let x = lu.solve(&DVector::from_column_slice(b));
+                match x {
+                    Some(x) => b.copy_from_slice(x.as_slice()),
+                    None => b.fill(f64::NAN),
+                }
+            }
         }
     }
 
@@ -191,8 +195,8 @@ impl SecondOrderLu {
                 let m = p.mass.nrows();
                 let (r1, r2) = r.split_at_mut(m);
                 let (v1, v2) = (DVector::from_column_slice(r1), DVector::from_column_slice(r2));
-                let mut dv = &p.mass * v2 - &p.stiffness * v1 * *gamma;
-                lu.substitute_in_place(dv.as_mut_slice());
+                let b = &p.mass * v2 - &p.stiffness * v1 * *gamma;
+                let dv = lu.solve(&b).unwrap_or_else(|| DVector::from_element(m, f64::NAN));
                 for ((x, v), d) in r1.iter_mut().zip(r2.iter_mut()).zip(dv.iter()) {
                     *x += gamma * d;
                     *v = *d;

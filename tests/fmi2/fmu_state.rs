@@ -330,6 +330,7 @@ fn fuzz_regressions_of_the_deserializer_are_refused_with_their_reason() {
         ("lu-factors-without-an-lu", "absent `lu`"),
         ("tolerance-value-without-its-flag", "`tolerance_defined` is 0"),
         ("unused-reals-of-the-law-piece", "absent `piece`"),
+        ("lu-flag-whose-parts-do-not-factor", "field `lu` is out of range"),
         // Well formed, but an FMI 3.0 instance's: fmi2SetFMUstate refuses it (below);
         // tests/fmi3/fuzz_regressions.rs replays them on the FMI 3.0 path.
         ("fmi3-state-restores-into-an-fmi3-instance", "other FMI version"),

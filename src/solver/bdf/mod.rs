@@ -185,6 +185,9 @@ where
     second_order: Option<Layout>,
     structure: Option<SecondOrder>,
     structured: Option<SecondOrderLu>,
+    /// A restored state flagged a factorisation its parts do not give (not visited: set on
+    /// reading, refused by the check).
+    lu_unrestorable: bool,
     gamma: f64,
     gamma_lu: f64,
     /// What the Newton iteration derives from γ, γ of the LU and the coefficients, which
@@ -241,6 +244,7 @@ where
             second_order: None,
             structure: None,
             structured: None,
+            lu_unrestorable: false,
             gamma: 0.0,
             gamma_lu: 0.0,
             derived: NewtonScalars::default(),

@@ -80,6 +80,9 @@ where
                 (Some(parts), true) => parts.factor(self.gamma_lu),
                 _ => None,
             };
+            // The integrator flags a factorisation only once it has one: a flag its parts
+            // cannot give again was not written by it (and would not read back the same).
+            self.lu_unrestorable = has_lu && self.structured.is_none();
         }
         // Derived, not visited: what a reader stored gives them.
         self.derive_from_coeffs();
@@ -177,6 +180,7 @@ where
         if let Some(lu) = &self.lu {
             lu.check()?;
         }
+        require(!self.lu_unrestorable, "lu")?;
         if let Some(parts) = &self.structure {
             require(parts.is_finite(), "structure")?;
         }
