@@ -56,14 +56,29 @@ impl Band {
     /// A·x into `y`.
     pub fn mul_into(&self, x: &[f64], y: &mut [f64]) {
         debug_assert!(x.len() == self.n() && y.len() == self.n());
+        let n = self.n();
+        let (x, y) = (&x[..n], &mut y[..n]);
         for (i, row) in self.rows.iter().enumerate() {
             y[i] = row[0] * x[i];
         }
-        for (i, row) in self.rows.iter().enumerate() {
-            for k in 1..=BAND.min(i) {
-                let j = i - k;
-                y[i] += row[k] * x[j];
-                y[j] += row[k] * x[i];
+        // Rows below the band's corner in one loop of fixed length (the compiler unrolls it).
+        for (i, row) in self.rows.iter().enumerate().take(BAND) {
+            for k in 1..=i {
+                y[i] += row[k] * x[i - k];
+                y[i - k] += row[k] * x[i];
+            }
+        }
+        for i in BAND..n {
+            let row = &self.rows[i];
+            let (lo, at) = (&x[i - BAND..i], x[i]);
+            let mut s = 0.0;
+            for k in 1..=BAND {
+                s += row[k] * lo[BAND - k];
+            }
+            y[i] += s;
+            let ylo = &mut y[i - BAND..i];
+            for k in 1..=BAND {
+                ylo[BAND - k] += row[k] * at;
             }
         }
     }

@@ -184,6 +184,12 @@ impl BeamBodyN {
 
     /// −K q − D q̇ into `f`.
     pub(super) fn elastic_into(&self, q: &[f64], qd: &[f64], f: &mut [f64]) {
+        self.restoring_into(q, qd, f);
+        f.iter_mut().for_each(|f| *f = -*f);
+    }
+
+    /// Kq + Dq̇ into `f`: the negative of [`elastic_into`](Self::elastic_into)'s.
+    pub(super) fn restoring_into(&self, q: &[f64], qd: &[f64], f: &mut [f64]) {
         self.beam.stiffness.mul_into(q, f);
         if let Some(d) = &self.damping {
             let mut dq = [0.0; MAX_DOFS];
@@ -191,7 +197,6 @@ impl BeamBodyN {
             d.mul_into(qd, dq);
             f.iter_mut().zip(dq.iter()).for_each(|(f, d)| *f += d);
         }
-        f.iter_mut().for_each(|f| *f = -*f);
     }
 
     /// The reduced equations M q̈ = F at (q, q̇), into the caller's buffers: Gq into `gq`,

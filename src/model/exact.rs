@@ -64,6 +64,10 @@ struct Rule {
     c: [f64; P],
     b: [f64; P],
     a: [[f64; P]; P],
+    /// d_j = Σ_i b_i A_ij and G_jk = Σ_i b_i A_ij A_ik: the running integral's adjoint
+    /// composed with it, so the residual's two sweeps need one P×P product an element.
+    d: [f64; P],
+    g: [[f64; P]; P],
 }
 
 impl Rule {
@@ -87,7 +91,11 @@ impl Rule {
             let x = lu.solve(&rhs).expect("the Gauss nodes are distinct");
             row.iter_mut().zip(x.iter()).for_each(|(r, x)| *r = *x);
         }
-        Self { c, b, a }
+        let d = std::array::from_fn(|j| (0..P).map(|i| b[i] * a[i][j]).sum());
+        let g = std::array::from_fn(|j| {
+            std::array::from_fn(|k| (0..P).map(|i| b[i] * a[i][j] * a[i][k]).sum())
+        });
+        Self { c, b, a, d, g }
     }
 }
 
@@ -104,6 +112,10 @@ struct Section {
 struct Angles {
     at: Vec<Section>,
 }
+
+/// One element in the residual's sweep: f = p α̈ − e α̇² at its points (x, then y), the sum
+/// of its point forces and its base's increment.
+type ElementSweep = ([[f64; P]; 2], [f64; 2], [f64; 2]);
 
 /// The exact beam with n elements and the body.
 #[derive(Clone, Debug, PartialEq)]
@@ -129,11 +141,6 @@ fn local(q: &[f64], e: usize) -> [f64; 4] {
     } else {
         [q[2 * e - 2], q[2 * e - 1], q[2 * e], q[2 * e + 1]]
     }
-}
-
-/// The global index of element e's local coordinate `a`, `None` for the clamp's.
-fn global(e: usize, a: usize) -> Option<usize> {
-    (2 * e + a).checked_sub(2)
 }
 
 /// A Gauss point of the centreline: its arc length, its weight and its motion.
@@ -183,8 +190,12 @@ impl ExactBeam {
 
     /// α at each Gauss point of element e for coordinates `q`.
     fn alpha(&self, q: &[f64], e: usize) -> [f64; P] {
-        let ql = local(q, e);
-        self.slope.map(|g| dot(&g, &ql))
+        let l = local(q, e);
+        let mut a = [0.0; P];
+        for (a, g) in a.iter_mut().zip(&self.slope) {
+            *a = g[0] * l[0] + g[1] * l[1] + g[2] * l[2] + g[3] * l[3];
+        }
+        a
     }
 
     fn angles(&self, q: &[f64], qd: &[f64]) -> Angles {
@@ -206,6 +217,12 @@ impl ExactBeam {
 
     /// The generalised forces R(q, q̇, q̈) into `out` (the module's equations), zero on a
     /// motion; returns the tip's acceleration r̈(l). O(n).
+    ///
+    /// With f_j = p_j α̈_j − e_j α̇_j² at an element's points, r̈_i = R̈_e + h Σ_k A_ik f_k and
+    /// the point forces F_i = m h b_i (r̈_i − g_b e_x), the adjoint sweep's
+    /// B_j = h b_j L_e + h Σ_i A_ij F_i (L_e: the force of everything beyond the element) is
+    /// h b_j L_e + m h² d_j (R̈_e − g_b e_x) + m h³ Σ_k G_jk f_k, and Σ_i F_i is
+    /// m h (R̈_e − g_b e_x) + m h² Σ_k d_k f_k ([`Rule`]'s d and G).
     fn residual_with(
         &self,
         ang: &Angles,
@@ -217,21 +234,26 @@ impl ExactBeam {
     ) -> [f64; 2] {
         let Params { m, m2, j_c, r, g, .. } = *self.params();
         let (n, h) = (self.n(), self.h());
-        let Rule { a, b, .. } = &self.rule;
-        // The points' accelerations r̈_i = R̈_e + h Σ_j A_ij (p_j α̈_j − e_j α̇_j²), in order.
-        // An element's P points a push (one capacity check, no index checks on reading back).
-        let mut acc: Vec<[[f64; 2]; P]> = Vec::with_capacity(n);
+        let Rule { b, d, g: gm, .. } = &self.rule;
+        let (mh, mh2, mh3) = (m * h, m * h * h, m * h * h * h);
+        // Root to tip: the base accelerations, and the sum of the point forces Σ F.
+        // f by element with its forces' sum and its base's increment h Σ b_j f_j, pushed (a
+        // zeroed buffer for the largest n costs more than the allocation).
+        let mut elements: Vec<ElementSweep> = Vec::with_capacity(n);
         let mut base = [0.0; 2];
-        for (e, sections) in ang.at.chunks_exact(P).enumerate() {
-            let add = self.alpha(qdd, e);
-            let (mut fx, mut fy) = ([0.0; P], [0.0; P]);
-            for (j, &Section { sin: s, cos: c, rate: w }) in sections.iter().enumerate() {
-                fx[j] = -s * add[j] - c * w * w;
-                fy[j] = c * add[j] - s * w * w;
-            }
-            acc.push(a.map(|a_i| [base[0] + h * dot(&a_i, &fx), base[1] + h * dot(&a_i, &fy)]));
-            base[0] += h * dot(b, &fx);
-            base[1] += h * dot(b, &fy);
+        let mut total = [0.0; 2];
+        for e in 0..n {
+            let [fx, fy] = self.point_accelerations(ang, qdd, e);
+            let sum = [
+                mh * (base[0] - self.g_beam) + mh2 * dot(d, &fx),
+                mh * base[1] + mh2 * dot(d, &fy),
+            ];
+            let step = [h * dot(b, &fx), h * dot(b, &fy)];
+            elements.push(([fx, fy], sum, step));
+            total[0] += sum[0];
+            total[1] += sum[1];
+            base[0] += step[0];
+            base[1] += step[1];
         }
         let t = 2 * n - 2;
         let (st, ct) = math::sin_cos(q[t + 1] + phi.phi);
@@ -241,40 +263,42 @@ impl ExactBeam {
             m2 * (base[0] - r * st * ddth - r * ct * dth * dth - g),
             m2 * (base[1] + r * ct * ddth - r * st * dth * dth),
         ];
-        // The adjoint sweep from the tip: B_j = h Σ_i A_ij f_i + h b_j (Σ_{later} f + tip),
-        // f_i = m w_i (r̈_i − g_b e_x); R_k = Σ_j ∂α_j/∂q_k (p_j · B_j).
-        out.fill(0.0);
-        let mut later = tip;
-        for (e, acc_e) in acc.iter().enumerate().rev() {
-            let (mut fx, mut fy) = ([0.0; P], [0.0; P]);
-            for i in 0..P {
-                let w = m * h * b[i];
-                fx[i] = w * (acc_e[i][0] - self.g_beam);
-                fy[i] = w * acc_e[i][1];
+        self.quadratic.restoring_into(q, qd, out);
+        // Root to tip again, L_e = tip + Σ F − (the forces up to e's end), and
+        // R_k = Σ_j ∂α_j/∂q_k (p_j · B_j).
+        let mut later = [tip[0] + total[0], tip[1] + total[1]];
+        let mut base = [-self.g_beam, 0.0];
+        for (e, ([fx, fy], sum, step)) in elements.iter().enumerate() {
+            later[0] -= sum[0];
+            later[1] -= sum[1];
+            let mut beta = [0.0; P];
+            for (j, point) in ang.at[e * P..(e + 1) * P].iter().enumerate() {
+                let bx = h * b[j] * later[0] + mh2 * d[j] * base[0] + mh3 * dot(&gm[j], fx);
+                let by = h * b[j] * later[1] + mh2 * d[j] * base[1] + mh3 * dot(&gm[j], fy);
+                beta[j] = -point.sin * bx + point.cos * by;
             }
-            for j in 0..P {
-                let (mut bx, mut by) = (h * b[j] * later[0], h * b[j] * later[1]);
-                for i in 0..P {
-                    bx += h * a[i][j] * fx[i];
-                    by += h * a[i][j] * fy[i];
-                }
-                let point = ang.at[e * P + j];
-                let beta = -point.sin * bx + point.cos * by;
-                for (loc, d) in self.slope[j].iter().enumerate() {
-                    if let Some(gi) = global(e, loc) {
-                        out[gi] += d * beta;
-                    }
-                }
+            let first = if e == 0 { 2 } else { 0 };
+            for loc in first..4 {
+                out[2 * e + loc - 2] += (0..P).map(|j| self.slope[j][loc] * beta[j]).sum::<f64>();
             }
-            later[0] += fx.iter().sum::<f64>();
-            later[1] += fy.iter().sum::<f64>();
+            base[0] += step[0];
+            base[1] += step[1];
         }
         out[t + 1] += r * (-st * tip[0] + ct * tip[1]) + j_c * ddth;
-        let mut elastic = [0.0; MAX_DOFS];
-        let elastic = &mut elastic[..q.len()];
-        self.quadratic.elastic_into(q, qd, elastic);
-        out.iter_mut().zip(elastic.iter()).for_each(|(o, f)| *o -= f);
-        base
+        [base[0] + self.g_beam, base[1]]
+    }
+
+    /// f_j = p_j α̈_j − e_j α̇_j² at element e's points, x and y.
+    fn point_accelerations(&self, ang: &Angles, qdd: &[f64], e: usize) -> [[f64; P]; 2] {
+        let add = self.alpha(qdd, e);
+        let (mut fx, mut fy) = ([0.0; P], [0.0; P]);
+        for (j, &Section { sin: s, cos: c, rate: w }) in
+            ang.at[e * P..(e + 1) * P].iter().enumerate()
+        {
+            fx[j] = -s * add[j] - c * w * w;
+            fy[j] = c * add[j] - s * w * w;
+        }
+        [fx, fy]
     }
 
     /// R(q, q̇, q̈) into `out`, zero on a motion ([`residual_with`](Self::residual_with)).
@@ -533,7 +557,7 @@ impl ExactBeam {
         qdd: &[f64],
     ) -> (Vec<GaussPoint>, Vec<PointMotion>) {
         let (n, h) = (self.n(), self.h());
-        let Rule { a, b, c } = &self.rule;
+        let Rule { a, b, c, .. } = &self.rule;
         let mut out = Vec::with_capacity(n * P);
         let mut nodes = Vec::with_capacity(n);
         let mut base = PointMotion::default();
