@@ -277,10 +277,15 @@ impl ExactBeam {
                 let by = h * b[j] * later[1] + mh2 * d[j] * base[1] + mh3 * dot(&gm[j], fy);
                 beta[j] = -point.sin * bx + point.cos * by;
             }
-            let first = if e == 0 { 2 } else { 0 };
-            for loc in first..4 {
-                out[2 * e + loc - 2] += (0..P).map(|j| self.slope[j][loc] * beta[j]).sum::<f64>();
+            let mut to = [0.0; 4];
+            for (g, beta) in self.slope.iter().zip(beta) {
+                for (to, g) in to.iter_mut().zip(g) {
+                    *to += g * beta;
+                }
             }
+            // Element e's coordinates are (w, α) of nodes e and e + 1; node 0 is clamped.
+            let (from, to) = if e == 0 { (0, &to[2..]) } else { (2 * e - 2, &to[..]) };
+            out[from..from + to.len()].iter_mut().zip(to).for_each(|(o, x)| *o += x);
             base[0] += step[0];
             base[1] += step[1];
         }

@@ -139,7 +139,14 @@ impl SecondOrder {
         match self {
             SecondOrder::Banded(p) => p.factor(gamma).map(SecondOrderLu::Banded),
             SecondOrder::Dense(p) => {
-                let t = &p.mass + &p.damping * gamma + &p.stiffness * (gamma * gamma);
+                // One pass, each entry rounded as (M + C·γ) + S·γ² (as the sum of the scaled
+                // matrices was).
+                let g2 = gamma * gamma;
+                let mut t = p.mass.clone();
+                let (c, s) = (p.damping.as_slice(), p.stiffness.as_slice());
+                for ((t, c), s) in t.as_mut_slice().iter_mut().zip(c).zip(s) {
+                    *t = (*t + c * gamma) + s * g2;
+                }
                 if !t.iter().all(|x| x.is_finite()) {
                     return None;
                 }

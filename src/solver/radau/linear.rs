@@ -56,12 +56,24 @@ fn gammas(h: f64) -> (f64, C64) {
 /// stores them), row by row, real and imaginary parts.
 fn combine(n: usize, terms: &[(C64, &[f64])]) -> (Vec<f64>, Vec<f64>) {
     let (mut re, mut im) = (vec![0.0; n * n], vec![0.0; n * n]);
-    for (c, a) in terms {
-        // Column j holds the j-th entry of every row.
-        for (j, col) in a.chunks_exact(n).enumerate() {
-            for (i, x) in col.iter().enumerate() {
-                re[i * n + j] += c.re * x;
-                im[i * n + j] += c.im * x;
+    // One pass, each entry written once, in tiles of TILE columns by TILE rows: the transpose
+    // then touches a few cache lines at a time (term by term over the whole matrix it was a
+    // tenth of a 32-element run). Each entry's sum is taken in the terms' order.
+    const TILE: usize = 8;
+    for j0 in (0..n).step_by(TILE) {
+        for i0 in (0..n).step_by(TILE) {
+            for j in j0..(j0 + TILE).min(n) {
+                for i in i0..(i0 + TILE).min(n) {
+                    // Column j holds the j-th entry of every row.
+                    let (mut r, mut m) = (0.0, 0.0);
+                    for (c, a) in terms {
+                        let x = a[j * n + i];
+                        r += c.re * x;
+                        m += c.im * x;
+                    }
+                    re[i * n + j] = r;
+                    im[i * n + j] = m;
+                }
             }
         }
     }
