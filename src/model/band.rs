@@ -71,11 +71,12 @@ impl Band {
         for i in BAND..n {
             let row = &self.rows[i];
             let (lo, at) = (&x[i - BAND..i], x[i]);
-            let mut s = 0.0;
+            // In the order the products were added before (the same bits).
+            let mut s = y[i];
             for k in 1..=BAND {
                 s += row[k] * lo[BAND - k];
             }
-            y[i] += s;
+            y[i] = s;
             let ylo = &mut y[i - BAND..i];
             for k in 1..=BAND {
                 ylo[BAND - k] += row[k] * at;
