@@ -15,7 +15,7 @@
 
 use super::band::{BandLu, GenBand};
 use super::snapshot::StateVisitor;
-use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Vector3, LU};
+use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut, Dyn, Matrix3, Vector3, LU};
 
 /// A band matrix plus u·vᵀ.
 #[derive(Clone, Debug, PartialEq)]
@@ -184,10 +184,9 @@ impl SecondOrderLu {
         match self {
             SecondOrderLu::Banded(lu) => lu.solve_reduced(b),
             SecondOrderLu::Dense { lu, .. } => {
-                let x = lu.solve(&DVector::from_column_slice(b));
-                match x {
-                    Some(x) => b.copy_from_slice(x.as_slice()),
-                    None => b.fill(f64::NAN),
+                let m = b.len();
+                if !lu.solve_mut(&mut DVectorViewMut::from_slice(b, m)) {
+                    b.fill(f64::NAN);
                 }
             }
         }
@@ -201,9 +200,15 @@ impl SecondOrderLu {
             (SecondOrderLu::Dense { gamma, lu }, SecondOrder::Dense(p)) => {
                 let m = p.mass.nrows();
                 let (r1, r2) = r.split_at_mut(m);
-                let (v1, v2) = (DVector::from_column_slice(r1), DVector::from_column_slice(r2));
-                let b = &p.mass * v2 - &p.stiffness * v1 * *gamma;
-                let dv = lu.solve(&b).unwrap_or_else(|| DVector::from_element(m, f64::NAN));
+                // M r2 − (S r1)·γ, by the products `*` takes, into two buffers (the Newton
+                // iteration's solve: no other allocation).
+                let (mut dv, mut sr1) = (DVector::zeros(m), DVector::zeros(m));
+                dv.gemv(1.0, &p.mass, &DVectorView::from_slice(r2, m), 0.0);
+                sr1.gemv(1.0, &p.stiffness, &DVectorView::from_slice(r1, m), 0.0);
+                dv.iter_mut().zip(sr1.iter()).for_each(|(b, s)| *b -= s * *gamma);
+                if !lu.solve_mut(&mut dv) {
+                    dv.fill(f64::NAN);
+                }
                 for ((x, v), d) in r1.iter_mut().zip(r2.iter_mut()).zip(dv.iter()) {
                     *x += gamma * d;
                     *v = *d;
