@@ -133,6 +133,8 @@ where
     /// The last stage's accelerations of the residual form's collocation (f's second half at
     /// the step's end), empty when the first-order form solved the step.
     stage_acc: Vec<f64>,
+    /// The residual form's Newton buffers, kept from step to step (not part of the state).
+    scratch: mechanical::Scratch,
     /// A restored state's field that this solver cannot hold, for [`Integrator::check_state`].
     refused: Option<&'static str>,
     stats: Stats,
@@ -191,6 +193,7 @@ where
             steps_at_jac: 0,
             residual_form: true,
             stage_acc: Vec::new(),
+            scratch: Default::default(),
             refused: None,
             stats: Stats::default(),
         })
