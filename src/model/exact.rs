@@ -236,9 +236,9 @@ impl ExactBeam {
         let (n, h) = (self.n(), self.h());
         let Rule { b, d, g: gm, .. } = &self.rule;
         let (mh, mh2, mh3) = (m * h, m * h * h, m * h * h * h);
-        // Root to tip: the base accelerations, and the sum of the point forces Σ F.
-        // f by element with its forces' sum and its base's increment h Σ b_j f_j, pushed (a
-        // zeroed buffer for the largest n costs more than the allocation).
+        // Root to tip: each element's f, the sum of its point forces and its base's increment
+        // h Σ b_j f_j, pushed (a zeroed buffer for the largest n costs more than the
+        // allocation); their totals.
         let mut elements: Vec<ElementSweep> = Vec::with_capacity(n);
         let mut base = [0.0; 2];
         let mut total = [0.0; 2];
@@ -463,11 +463,10 @@ impl ExactBeam {
         let h = self.h();
         let mut acc = [0.0; 2];
         for e in 0..self.n() {
-            let add = self.alpha(qdd, e);
-            for (j, dd) in add.iter().enumerate() {
-                let Section { sin: s, cos: c, rate: w } = ang.at[e * P + j];
-                acc[0] += h * self.rule.b[j] * (-s * dd - c * w * w);
-                acc[1] += h * self.rule.b[j] * (c * dd - s * w * w);
+            let [fx, fy] = self.point_accelerations(ang, qdd, e);
+            for (j, b) in self.rule.b.iter().enumerate() {
+                acc[0] += h * b * fx[j];
+                acc[1] += h * b * fy[j];
             }
         }
         acc
